@@ -1,0 +1,1 @@
+"""Data files the scene loads: URDFs, meshes, map extracts (with their licences)."""

@@ -1,0 +1,83 @@
+"""One UAV's onboard software: sensing → estimation → guidance, composed as the world file says.
+
+The agent runs at its own rate. Between its steps, detections arrive (each with the time it was taken and the time it
+reaches the agent); at a step the agent hands every detection that has arrived, in the order they were taken, to its
+estimator, which predicts to each measurement's own time stamp; then the guidance law turns the estimate into a set-point.
+
+Users plug in their own estimator or guidance law: anything with the methods of :class:`TargetEstimator` or
+:class:`GuidanceLaw` works (no base class needed), named by import path in the world file (``type: plugin``,
+``plugin: mypkg.mymodule:MyClass``) or passed in code to :func:`simulator.api.run`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+from autonomy.guidance.setpoints import Setpoint
+from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from autonomy.sensing.measurement import Detection
+
+__all__ = ["Agent", "AgentOutput", "TargetEstimator", "GuidanceLaw"]
+
+
+@runtime_checkable
+class TargetEstimator(Protocol):
+    """What the agent needs from an estimator."""
+
+    def step(self, t: float, detections: Sequence[Detection]) -> TargetEstimate | None:
+        """Absorb ``detections`` (arrived by ``t``, sorted by ``t_meas``) and return the estimate valid at ``t`` (s), if any."""
+        ...
+
+
+@runtime_checkable
+class GuidanceLaw(Protocol):
+    """What the agent needs from a guidance law."""
+
+    def command(self, own: OwnState, target: TargetEstimate | None, teammates: Sequence[TeammateState],
+                t: float) -> Setpoint:
+        """Set-point for the UAV at ``t`` (s)."""
+        ...
+
+
+@dataclass(frozen=True)
+class AgentOutput:
+    """What one agent step produced: the set-point, the estimate it was based on, and how many detections it used."""
+
+    setpoint: Setpoint
+    estimate: TargetEstimate | None
+    used_detections: int
+
+
+class Agent:
+    """One UAV's autonomy.
+
+    Parameters
+    ----------
+    uav_id : str
+        The UAV's id (from the world file).
+    estimator : TargetEstimator
+        Target estimator (built-in tracker or a user's class).
+    guidance : GuidanceLaw
+        Guidance law (built-in or a user's class).
+    """
+
+    def __init__(self, uav_id: str, estimator: TargetEstimator, guidance: GuidanceLaw) -> None:
+        self.uav_id = uav_id
+        self.estimator = estimator
+        self.guidance = guidance
+        self._pending: list[Detection] = []
+        self.estimate: TargetEstimate | None = None
+
+    def receive(self, detections: Sequence[Detection]) -> None:
+        """Queue detections; they are used at the first step at or after their arrival time."""
+        self._pending.extend(detections)
+
+    def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState]) -> AgentOutput:
+        """Run estimation and guidance at time ``t`` (s)."""
+        ready = sorted((d for d in self._pending if d.t_arrival <= t + 1e-9), key=lambda d: d.t_meas)
+        self._pending = [d for d in self._pending if d.t_arrival > t + 1e-9]
+        self.estimate = self.estimator.step(t, ready)
+        setpoint = self.guidance.command(own, self.estimate, teammates, t)
+        return AgentOutput(setpoint=setpoint, estimate=self.estimate, used_detections=len(ready))

@@ -1,0 +1,317 @@
+"""A world, built: the PyBullet scene, the vehicle fleets, each UAV's sensors and agent, and one tick of the run loop."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pybullet as p
+
+from autonomy.agent import Agent
+from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
+from autonomy.guidance.types import OwnState, TeammateState
+from autonomy.sensing.measurement import Sensor
+from autonomy.sensing.scene import SensorPose, TargetTruth
+from simulator.clock import Clock
+from simulator.factories import build_estimator, build_guidance, build_sensor
+from simulator.record import RunRecorder
+from simulator.scene import Scene, SceneConfig
+from simulator.scene_query import PybulletSceneQuery
+from simulator.seeding import RunSeeds
+from vehicles.quadrotor.commands import UnicycleCommand, VelocityCommand
+from worlds.build import build_geometry
+from worlds.errors import WorldError, WorldIssue
+from worlds.loader import LoadedWorld
+
+__all__ = ["Assembly", "Prepared", "prepare", "build_assembly"]
+
+
+@dataclass
+class SensorSlot:
+    uav: int
+    sensor: Sensor
+    divisor: int
+    rng: np.random.Generator
+    name: str
+
+
+@dataclass
+class AgentSlot:
+    uav: int
+    agent: Agent
+    divisor: int
+
+
+@dataclass
+class Assembly:
+    """Everything a run steps, with the tick of DESIGN.md in :meth:`step`."""
+
+    clock: Clock
+    scene: Scene
+    recorder: RunRecorder
+    buildings: list
+    network: Any
+    quads: Any
+    cars: Any
+    uav_ids: list[str]
+    car_ids: list[str]
+    car_kinds: tuple[str, ...]
+    target_index: int | None
+    scene_query: PybulletSceneQuery
+    sensors: list[SensorSlot] = field(default_factory=list)
+    agents: list[AgentSlot] = field(default_factory=list)
+    record_div: int = 12
+    latest_estimates: dict[int, Any] = field(default_factory=dict)
+    latest_setpoints: dict[int, Any] = field(default_factory=dict)
+    world_spec: Any = None
+    event_counts_by_uav: dict = field(default_factory=dict)
+    _contacts: set = field(default_factory=set)
+
+    # -- truth ---------------------------------------------------------------------------------------------------
+    def target_truth(self) -> TargetTruth:
+        if self.cars is None:
+            return TargetTruth.empty()
+        st = self.cars.state
+        return TargetTruth(ids=np.arange(len(self.car_ids)), p_W=st.p_W, v_W=st.v_W, kind=self.car_kinds,
+                           yaw=np.asarray(st.yaw))
+
+    def own_state(self, i: int, t: float) -> OwnState:
+        st = self.quads.state
+        return OwnState(t=t, p_W=st.p_W[i], v_W=st.v_W[i], yaw=_yaw(st.q_WB[i]))
+
+    def teammates(self, i: int, t: float) -> list[TeammateState]:
+        st = self.quads.state
+        out = []
+        for j in range(len(self.uav_ids)):
+            if j == i:
+                continue
+            out.append(TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=_yaw(st.q_WB[j])))
+        return out
+
+    # -- the tick ------------------------------------------------------------------------------------------------
+    def step(self, tick: int) -> None:
+        fleets = [f for f in (self.quads, self.cars) if f is not None]
+        for f in fleets:                       # 1. actuators
+            f.apply_actuation()
+        self.scene.step()                      # 2. physics
+        for f in fleets:                       # 3. low-level controllers
+            f.after_step(tick)
+        t = self.clock.time(tick)
+        if self.sensors:                       # 4. sensors
+            truth = self.target_truth()
+            for slot in self.sensors:
+                if tick % slot.divisor:
+                    continue
+                st = self.quads.state
+                pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav])
+                out = slot.sensor.measure(t, pose, truth, self.scene_query, slot.rng)
+                self._record_detections(tick, t, slot, out)
+                for a in self.agents:
+                    if a.uav == slot.uav:
+                        a.agent.receive(out.detections)
+        for a in self.agents:                  # 5. agents
+            if tick % a.divisor:
+                continue
+            result = a.agent.step(t, self.own_state(a.uav, t), self.teammates(a.uav, t))
+            self.quads.set_command(a.uav, _to_command(result.setpoint))
+            self.latest_estimates[a.uav] = result.estimate
+            self.latest_setpoints[a.uav] = result.setpoint
+            self._record_agent(tick, t, a.uav, result)
+        for f in fleets:                       # 6. record
+            for ev in f.pop_events():
+                self._event(tick, t, dict(ev))
+        if tick % self.record_div == 0:
+            self._record_truth(tick, t)
+            self._check_collisions(tick, t)
+
+    # -- recording -----------------------------------------------------------------------------------------------
+    def _record_truth(self, tick: int, t: float) -> None:
+        if self.quads is not None:
+            st = self.quads.state
+            n = len(self.uav_ids)
+            self.recorder.append_rows("uav_truth", {
+                "tick": np.full(n, tick), "t": np.full(n, t), "uav": np.arange(n),
+                "x": st.p_W[:, 0], "y": st.p_W[:, 1], "z": st.p_W[:, 2],
+                "qx": st.q_WB[:, 0], "qy": st.q_WB[:, 1], "qz": st.q_WB[:, 2], "qw": st.q_WB[:, 3],
+                "vx": st.v_W[:, 0], "vy": st.v_W[:, 1], "vz": st.v_W[:, 2]})
+        if self.cars is not None:
+            st = self.cars.state
+            n = len(self.car_ids)
+            self.recorder.append_rows("vehicle_truth", {
+                "tick": np.full(n, tick), "t": np.full(n, t), "vehicle": np.arange(n),
+                "x": st.p_W[:, 0], "y": st.p_W[:, 1], "z": st.p_W[:, 2], "yaw": np.asarray(st.yaw),
+                "vx": st.v_W[:, 0], "vy": st.v_W[:, 1], "vz": st.v_W[:, 2],
+                "ax": st.a_W[:, 0], "ay": st.a_W[:, 1], "az": st.a_W[:, 2], "speed": np.asarray(st.speed),
+                "road": np.asarray(list(st.road_id), dtype=str), "s": np.asarray(st.s),
+                "lateral": np.asarray(st.lateral)})
+
+    def _record_detections(self, tick: int, t: float, slot: SensorSlot, out: Any) -> None:
+        for d, tid in zip(out.detections, out.truth_ids):
+            z = np.full(4, np.nan)
+            z[: min(4, d.z.size)] = d.z[:4]
+            self.recorder.append("detections", tick=tick, t_meas=d.t_meas, t_arrival=d.t_arrival, uav=slot.uav,
+                                 sensor=slot.name, kind=d.kind, truth_id=int(tid),
+                                 z0=z[0], z1=z[1], z2=z[2], z3=z[3])
+
+    def _record_agent(self, tick: int, t: float, uav: int, result: Any) -> None:
+        est = result.estimate
+        row = {"tick": tick, "t": t, "uav": uav, "valid": est is not None, "x": np.nan, "y": np.nan,
+               "vx": np.nan, "vy": np.nan, "pxx": np.nan, "pxy": np.nan, "pyy": np.nan, "pvxvx": np.nan,
+               "pvyvy": np.nan, "detections": result.used_detections}
+        if est is not None:
+            row.update(x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0], vy=est.v_W[1])
+            if est.P is not None:
+                n = est.p_W.size
+                row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1], pvxvx=est.P[n, n],
+                           pvyvy=est.P[n + 1, n + 1])
+        self.recorder.append("estimates", **row)
+        sp = result.setpoint
+        cmd = {"tick": tick, "t": t, "uav": uav, "kind": type(sp).__name__, "speed": np.nan, "heading_rate": np.nan,
+               "altitude": np.nan, "vx": np.nan, "vy": np.nan, "vz": np.nan}
+        if isinstance(sp, UnicycleSetpoint):
+            cmd.update(speed=sp.speed, heading_rate=sp.heading_rate, altitude=sp.altitude)
+        elif isinstance(sp, VelocitySetpoint):
+            cmd.update(vx=sp.v_W[0], vy=sp.v_W[1], vz=sp.v_W[2])
+        self.recorder.append("commands", **cmd)
+
+    def _check_collisions(self, tick: int, t: float) -> None:
+        if self.quads is None:
+            return
+        now = set()
+        names = self._body_names()
+        for i, body in enumerate(self.quads.body_ids):
+            for c in p.getContactPoints(bodyA=int(body), physicsClientId=self.scene.client):
+                other = c[2]
+                now.add((i, other))
+        for i, other in sorted(now - self._contacts):
+            self._event(tick, t, {"type": "collision", "uav": i, "uav_id": self.uav_ids[i],
+                                  "other": names.get(other, f"body {other}")})
+        self._contacts = now
+
+    def _event(self, tick: int, t: float, ev: dict) -> None:
+        kind = ev.pop("type")
+        if "uav" in ev:
+            key = (kind, int(ev["uav"]))
+            self.event_counts_by_uav[key] = self.event_counts_by_uav.get(key, 0) + 1
+        self.recorder.event(kind, tick, t, **ev)
+
+    def _body_names(self) -> dict[int, str]:
+        names = {self.scene.ground_id: "ground"}
+        names.update({b: "building" for b in self.scene.building_ids})
+        if self.quads is not None:
+            names.update({int(b): f"uav {u}" for b, u in zip(self.quads.body_ids, self.uav_ids)})
+        if self.cars is not None:
+            names.update({int(b): f"vehicle {c}" for b, c in zip(self.cars.body_ids, self.car_ids)})
+        return names
+
+    def close(self) -> None:
+        self.scene.close()
+
+
+def _yaw(q: np.ndarray) -> float:
+    x, y, z, w = q
+    return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+
+
+def _to_command(sp: Any) -> Any:
+    if isinstance(sp, UnicycleSetpoint):
+        return UnicycleCommand(speed=sp.speed, heading_rate=sp.heading_rate, altitude=sp.altitude)
+    if isinstance(sp, VelocitySetpoint):
+        return VelocityCommand(v_W=sp.v_W, yaw=sp.yaw)
+    raise TypeError(f"guidance returned {type(sp).__name__}; expected UnicycleSetpoint or VelocitySetpoint")
+
+
+@dataclass
+class Prepared:
+    """Everything built before the physics starts: geometry and the autonomy of each UAV (fails fast on bad input)."""
+
+    loaded: LoadedWorld
+    clock: Clock
+    geometry: Any
+    sensors: list[SensorSlot]
+    agents: list[AgentSlot]
+
+
+def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) -> Prepared:
+    """Build geometry, sensors, estimators and guidance; raises :class:`WorldError` naming the entry on a bad one."""
+    from vehicles.quadrotor.airframes import load_airframe
+
+    world = loaded.world
+    geometry = build_geometry(world, loaded.path, seeds.generator("world/town"))
+    issues = []
+    for i, u in enumerate(world.uavs):
+        try:
+            load_airframe(u.airframe)
+        except (KeyError, ValueError) as exc:
+            issues.append(WorldIssue(f"uavs[{i}].airframe", u.airframe, f"a known airframe ({exc})"))
+    if issues:
+        raise WorldError(str(loaded.path), issues)
+    sensors, agents = [], []
+    for i, u in enumerate(world.uavs):
+        for j, spec in enumerate(u.sensors):
+            name = spec.id or f"{u.id}/{spec.type}{j}"
+            where = f"uavs[{i}].sensors[{j}]"
+            sensor = _checked(loaded, where, spec, lambda: build_sensor(spec, name))
+            sensors.append(SensorSlot(uav=i, sensor=sensor, name=name, divisor=clock.divisor(spec.rate_hz, where),
+                                      rng=seeds.generator(f"sensor/{u.id}/{j}")))
+        if options.estimator_factory is not None:
+            estimator = options.estimator_factory(i, u)
+        else:
+            estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator", u.autonomy.estimator,
+                                 lambda: build_estimator(u, i))
+        if options.guidance_factory is not None:
+            guidance = options.guidance_factory(i, u)
+        else:
+            guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
+                                lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
+        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance),
+                                divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
+    return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents)
+
+
+def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Any) -> Any:
+    try:
+        return build()
+    except WorldError:
+        raise
+    except (ValueError, TypeError, KeyError, ImportError) as exc:
+        value = spec.model_dump(exclude_defaults=True) if hasattr(spec, "model_dump") else spec
+        raise WorldError(str(loaded.path), [WorldIssue(where, value, f"a valid configuration ({exc})")]) from None
+
+
+def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> Assembly:
+    """Start PyBullet and build the scene and the fleets of a prepared world."""
+    from simulator.factories import build_car_fleet, fleet_options
+    from vehicles.quadrotor.airframes import load_airframe
+    from vehicles.quadrotor.fleet import QuadrotorFleet
+
+    world, clock, geometry = prep.loaded.world, prep.clock, prep.geometry
+    scene = Scene.create(SceneConfig(physics_hz=clock.physics_hz, gravity=world.environment.gravity,
+                                     ground_size=tuple(world.terrain.size)))
+    scene.add_buildings(geometry.buildings)
+    if geometry.road_mesh is not None:
+        scene.add_road_surface(geometry.road_mesh)
+
+    quads = None
+    if world.uavs:
+        airframes = [load_airframe(u.airframe) for u in world.uavs]
+        p0 = np.array([u.initial.position for u in world.uavs], dtype=float)
+        yaw0 = np.radians([u.initial.yaw_deg for u in world.uavs])
+        quads = QuadrotorFleet(scene.client, airframes, p0, yaw0, clock.physics_hz, fleet_options(world),
+                               seeds.generator("vehicles/quadrotors"))
+    cars, car_kinds = None, ()
+    if world.ground_vehicles:
+        cars = build_car_fleet(world, geometry.network, scene.client, clock.physics_hz,
+                               seeds.generator("vehicles/cars"))
+        car_kinds = tuple("decoy" if g.role == "decoy" else "car" for g in world.ground_vehicles)
+
+    car_ids = [g.id for g in world.ground_vehicles]
+    target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]
+    return Assembly(clock=clock, scene=scene, recorder=recorder, buildings=geometry.buildings,
+                    network=geometry.network, quads=quads, cars=cars, uav_ids=[u.id for u in world.uavs],
+                    car_ids=car_ids, car_kinds=car_kinds,
+                    target_index=car_ids.index(target_ids[0]) if target_ids else None,
+                    scene_query=PybulletSceneQuery(scene.client, scene.occluders),
+                    sensors=prep.sensors, agents=prep.agents, world_spec=world,
+                    record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))

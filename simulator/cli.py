@@ -1,0 +1,121 @@
+"""The ``skytrack`` command: run worlds, list them, run benchmarks.
+
+Exit codes: 0 success; 1 a run or benchmark failed; 2 bad input (invalid world, bad flag); 130 interrupted (Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import signal
+import sys
+from pathlib import Path
+
+from worlds.errors import WorldError
+
+__all__ = ["main"]
+
+
+def _run(args: argparse.Namespace) -> int:
+    from simulator.engine import RunOptions, run_world
+    from worlds.loader import load_world
+
+    loaded = load_world(args.world, args.set or [])  # WorldError is reported by main() before PyBullet starts
+    out = Path(args.out) if args.out else Path("runs") / loaded.world.name
+    opts = RunOptions(duration_s=args.duration, seed=args.seed, out_dir=out, progress=not args.quiet,
+                      plots=not args.no_plots)
+    result = run_world(loaded, opts)
+    _print_summary(result.metrics, out)
+    if result.status == "interrupted":
+        return 130
+    return 0 if result.status == "completed" else 1
+
+
+def _print_summary(metrics: dict, out: Path) -> None:
+    rows = [(k, v) for k, v in metrics.items() if not isinstance(v, (dict, list))]
+    width = max((len(k) for k, _ in rows), default=10)
+    print(f"\nrun record: {out}")
+    for k, v in rows:
+        text = f"{v:.4g}" if isinstance(v, float) else str(v)
+        print(f"  {k:<{width}}  {text}")
+    for section in ("uavs", "targets"):
+        for name, vals in (metrics.get(section) or {}).items():
+            shown = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in vals.items())
+            print(f"  {section[:-1]} {name}: {shown}")
+
+
+def _worlds(args: argparse.Namespace) -> int:
+    from worlds.loader import shipped_worlds
+
+    for name, path in shipped_worlds().items():
+        first = ""
+        for line in path.read_text(encoding="utf-8").splitlines():
+            if line.startswith("#"):
+                first = line.lstrip("# ").strip()
+                break
+        print(f"{name:<20} {first}")
+    return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from simulator.bench.runner import run_benchmarks
+
+    records, failures = run_benchmarks(args.only, progress=not args.json)
+    if args.json:
+        print(json.dumps([r.to_json() for r in records], indent=2))
+    else:
+        print(f"\n{'name':<42} {'value':>12} {'unit':<6} {'target':>10}  ok")
+        for r in records:
+            target = "" if r.target is None else f"{r.target:g}"
+            ok = {True: "yes", False: "NO", None: ""}[r.meets_target]
+            print(f"{r.name:<42} {r.value:>12.4g} {r.unit:<6} {target:>10}  {ok}")
+    for name, err in failures:
+        print(f"benchmark {name} failed: {err}", file=sys.stderr)
+    return 1 if failures else 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="skytrack", description="Multi-UAV ground-target tracking simulator")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a world headless and write a run directory")
+    r.add_argument("world", help="shipped world name (see 'skytrack worlds') or path to a world YAML file")
+    r.add_argument("--duration", type=float, default=None, help="simulated seconds (overrides sim.duration_s)")
+    r.add_argument("--seed", type=int, default=None, help="run seed (overrides sim.seed)")
+    r.add_argument("--out", default=None, help="run directory (default runs/<world name>)")
+    r.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
+                   help="override a world value, e.g. --set uavs[0].autonomy.guidance.standoff_m=150 (repeatable)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.set_defaults(fn=_run)
+
+    w = sub.add_parser("worlds", help="list the shipped worlds")
+    w.set_defaults(fn=_worlds)
+
+    b = sub.add_parser("bench", help="run the benchmark suite")
+    b.add_argument("--only", type=re.compile, default=None, metavar="REGEX", help="only benchmarks whose names match")
+    b.add_argument("--json", action="store_true", help="print a JSON list of records")
+    b.set_defaults(fn=_bench)
+    return ap
+
+
+def _sigterm_as_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    try:
+        return args.fn(args)
+    except WorldError as exc:
+        print(f"skytrack: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("skytrack: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,164 @@
+"""PNG plots of a run, made from its run directory alone (so they can be redrawn from any record, even a partial one).
+
+- ``plots/trajectories.png``: top-down map — buildings, roads, UAV tracks, the target's true path and the estimates;
+- ``plots/errors.png``: each UAV's position error against truth over time, with the filter's own 2σ bound;
+- ``plots/altitude.png``: UAV altitudes over time.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from simulator.runrecord import RunRecord, load_run
+
+__all__ = ["write_plots", "write_geometry"]
+
+_COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+
+
+def write_geometry(out_dir: Path, buildings: list, network: object | None) -> None:
+    """Store building footprints and road centre-lines in ``geometry.npz`` for plots and renderers."""
+    fps = [np.asarray(b.footprint) for b in buildings]
+    roads = []
+    if network is not None:
+        for road in network.roads.values():
+            s = np.linspace(0.0, road.length, max(2, int(road.length / 5.0) + 1))
+            roads.append(np.asarray(road.point(s)))
+    def pack(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        if not polys:
+            return np.zeros((0, 2)), np.zeros(1, dtype=int)
+        return np.concatenate(polys), np.cumsum([0] + [len(q) for q in polys])
+    bv, bo = pack(fps)
+    rv, ro = pack(roads)
+    np.savez(Path(out_dir) / "geometry.npz", building_xy=bv, building_offsets=bo, road_xy=rv, road_offsets=ro,
+             building_height=np.array([b.height for b in buildings]))
+
+
+def _unpack(xy: np.ndarray, offsets: np.ndarray) -> list[np.ndarray]:
+    return [xy[offsets[i]:offsets[i + 1]] for i in range(len(offsets) - 1)]
+
+
+def _by(stream: dict[str, np.ndarray], column: str, value: int) -> dict[str, np.ndarray]:
+    mask = stream[column] == value
+    return {k: v[mask] for k, v in stream.items()}
+
+
+def write_plots(run_dir: str | Path) -> list[Path]:
+    """Draw every plot the record allows; returns the files written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    run_dir = Path(run_dir)
+    rec = load_run(run_dir)
+    plots = run_dir / "plots"
+    plots.mkdir(exist_ok=True)
+    written = []
+
+    fig, ax = plt.subplots(figsize=(8, 8), dpi=110)
+    geo = run_dir / "geometry.npz"
+    if geo.exists():
+        with np.load(geo) as g:
+            roads = _unpack(g["road_xy"], g["road_offsets"])
+            blds = _unpack(g["building_xy"], g["building_offsets"])
+        for r in roads:
+            ax.plot(r[:, 0], r[:, 1], color="0.55", lw=2.5, solid_capstyle="round", zorder=1)
+        if blds:
+            ax.add_collection(PolyCollection(blds, facecolor="0.8", edgecolor="0.5", lw=0.5, zorder=2))
+    _draw_tracks(ax, rec)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    ax.set_title(f"{rec.run.get('world', '')} — seed {rec.run.get('seed', '')} — {rec.status}")
+    ax.legend(loc="upper right", fontsize=8)
+    _zoom_to_tracks(ax, rec)
+    fig.tight_layout()
+    written.append(plots / "trajectories.png")
+    fig.savefig(written[-1])
+    plt.close(fig)
+
+    if "estimates" in rec.streams and "vehicle_truth" in rec.streams:
+        target = int(rec.metrics.get("target_index", 0) or 0)
+        fig, ax = plt.subplots(figsize=(9, 4), dpi=110)
+        truth = _by(rec.streams["vehicle_truth"], "vehicle", target)
+        est = rec.streams["estimates"]
+        for u in np.unique(est["uav"]):
+            e = _by(est, "uav", int(u))
+            ok = e["valid"].astype(bool)
+            if not ok.any() or truth["t"].size == 0:
+                continue
+            tx = np.interp(e["t"][ok], truth["t"], truth["x"])
+            ty = np.interp(e["t"][ok], truth["t"], truth["y"])
+            err = np.hypot(e["x"][ok] - tx, e["y"][ok] - ty)
+            c = _COLORS[int(u) % len(_COLORS)]
+            ax.plot(e["t"][ok], err, color=c, lw=1.2, label=f"UAV {int(u)} error")
+            sig = 2 * np.sqrt(np.clip(e["pxx"][ok] + e["pyy"][ok], 0, None))
+            if np.isfinite(sig).any():
+                ax.plot(e["t"][ok], sig, color=c, lw=0.8, ls="--", label=f"UAV {int(u)} 2σ")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("position error (m)")
+        ax.set_title("target position error against truth")
+        ax.grid(alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize=8)
+        fig.tight_layout()
+        written.append(plots / "errors.png")
+        fig.savefig(written[-1])
+        plt.close(fig)
+
+    if "uav_truth" in rec.streams:
+        fig, ax = plt.subplots(figsize=(9, 3), dpi=110)
+        ut = rec.streams["uav_truth"]
+        for u in np.unique(ut["uav"]):
+            d = _by(ut, "uav", int(u))
+            ax.plot(d["t"], d["z"], color=_COLORS[int(u) % len(_COLORS)], label=f"UAV {int(u)}")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("altitude (m)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        written.append(plots / "altitude.png")
+        fig.savefig(written[-1])
+        plt.close(fig)
+    return written
+
+
+def _draw_tracks(ax: object, rec: RunRecord) -> None:
+    if "vehicle_truth" in rec.streams:
+        vt = rec.streams["vehicle_truth"]
+        for v in np.unique(vt["vehicle"]):
+            d = _by(vt, "vehicle", int(v))
+            ax.plot(d["x"], d["y"], color="k", lw=1.5, zorder=4, label="vehicle truth" if v == 0 else None)
+            ax.plot(d["x"][-1:], d["y"][-1:], "ks", ms=5, zorder=5)
+    if "uav_truth" in rec.streams:
+        ut = rec.streams["uav_truth"]
+        for u in np.unique(ut["uav"]):
+            d = _by(ut, "uav", int(u))
+            c = _COLORS[int(u) % len(_COLORS)]
+            ax.plot(d["x"], d["y"], color=c, lw=1.0, zorder=3, label=f"UAV {int(u)}")
+            ax.plot(d["x"][-1:], d["y"][-1:], "^", color=c, ms=7, zorder=5)
+    if "estimates" in rec.streams:
+        est = rec.streams["estimates"]
+        for u in np.unique(est["uav"]):
+            e = _by(est, "uav", int(u))
+            ok = e["valid"].astype(bool)
+            ax.plot(e["x"][ok], e["y"][ok], ".", color=_COLORS[int(u) % len(_COLORS)], ms=2, zorder=4,
+                    label=f"UAV {int(u)} estimate")
+
+
+def _zoom_to_tracks(ax: object, rec: RunRecord) -> None:
+    xs, ys = [], []
+    for name in ("uav_truth", "vehicle_truth"):
+        if name in rec.streams:
+            xs.append(rec.streams[name]["x"])
+            ys.append(rec.streams[name]["y"])
+    if not xs:
+        return
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    pad = max(50.0, 0.1 * max(np.ptp(x), np.ptp(y)))
+    ax.set_xlim(x.min() - pad, x.max() + pad)
+    ax.set_ylim(y.min() - pad, y.max() + pad)

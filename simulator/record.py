@@ -1,0 +1,154 @@
+"""Writing a run directory incrementally, so a run that raises, is interrupted or is killed still leaves a readable record.
+
+Layout of a run directory::
+
+    world.yaml            the resolved world (after --set overrides), exactly as the run used it
+    run.json              seed, world name and source, versions, start time
+    events.jsonl          one JSON object per line: run_start, collisions, saturations, solver failures, ..., run_end
+    metrics.json          rewritten atomically at every flush (partial) and at the end (final; "complete": true)
+    timeseries/<stream>/part-NNNNN.npz
+                          columnar chunks (one array per column, equal lengths), each written atomically
+    plots/*.png           figures made at the end of the run
+
+Streams are "long" tables: one row per entity per sample, with ``tick`` and ``t`` columns, e.g. ``uav_truth`` has
+``tick, t, uav, x, y, z, qx, qy, qz, qw, vx, vy, vz``. :func:`simulator.runrecord.load_run` concatenates the chunks.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RunRecorder", "atomic_write_text", "json_default"]
+
+
+def json_default(obj: Any) -> Any:
+    """JSON encoder fallback for numpy scalars and arrays."""
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` via a temporary file and rename, so readers never see half a file."""
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+class _Stream:
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.columns: dict[str, list] = {}
+        self.rows = 0
+        self.parts = 0
+
+    def extend(self, columns: dict[str, Any], n: int) -> None:
+        """Append ``n`` rows given column-wise (each value a sequence of length ``n``)."""
+        if self.columns and columns.keys() != self.columns.keys():
+            differ = set(self.columns) ^ set(columns)
+            raise KeyError(f"stream {self.folder.name}: columns differ from the first rows: {sorted(differ)}")
+        if not self.columns:
+            self.columns = {k: [] for k in columns}
+        for k, v in columns.items():
+            self.columns[k].extend(v)
+        self.rows += n
+
+    def flush(self) -> None:
+        if self.rows == 0:
+            return
+        self.folder.mkdir(parents=True, exist_ok=True)
+        arrays = {k: np.asarray(v) for k, v in self.columns.items()}
+        final = self.folder / f"part-{self.parts:05d}.npz"
+        tmp = self.folder / f".part-{self.parts:05d}.tmp.npz"
+        np.savez(tmp, **arrays)
+        os.replace(tmp, final)
+        self.parts += 1
+        self.columns = {k: [] for k in self.columns}
+        self.rows = 0
+
+
+class RunRecorder:
+    """Writes one run directory.
+
+    Parameters
+    ----------
+    out_dir : Path
+        The run directory; created if missing. Existing record files in it are replaced.
+    """
+
+    def __init__(self, out_dir: Path) -> None:
+        self.out_dir = Path(out_dir)
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        for old in ("events.jsonl", "metrics.json"):
+            (self.out_dir / old).unlink(missing_ok=True)
+        ts = self.out_dir / "timeseries"
+        if ts.exists():
+            for part in ts.glob("*/*.npz"):
+                part.unlink()
+        self._events = open(self.out_dir / "events.jsonl", "a", encoding="utf-8", buffering=1)
+        self._streams: dict[str, _Stream] = {}
+        self.event_counts: dict[str, int] = {}
+        self.closed = False
+
+    # -- static files ----------------------------------------------------------------------------------------------
+    def write_text(self, name: str, text: str) -> Path:
+        path = self.out_dir / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, text)
+        return path
+
+    def write_json(self, name: str, data: Any) -> Path:
+        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+
+    # -- events ----------------------------------------------------------------------------------------------------
+    def event(self, type: str, tick: int | None = None, t: float | None = None, **fields: Any) -> None:
+        """Append one event line (flushed at once)."""
+        rec = {"type": type, "tick": tick, "t": t, **fields, "wall": round(time.time(), 3)}
+        self._events.write(json.dumps(rec, default=json_default) + "\n")
+        self.event_counts[type] = self.event_counts.get(type, 0) + 1
+
+    # -- time series -----------------------------------------------------------------------------------------------
+    def append(self, stream: str, **row: Any) -> None:
+        """Append one row to ``stream`` (buffered until :meth:`flush`)."""
+        self._stream(stream).extend({k: (v,) for k, v in row.items()}, 1)
+
+    def append_rows(self, stream: str, columns: dict[str, Any]) -> None:
+        """Append several rows given column-wise (all columns of equal length; scalars are broadcast)."""
+        lengths = {len(v) for v in columns.values() if np.ndim(v) > 0}
+        if len(lengths) != 1:
+            raise ValueError(f"stream {stream}: columns of unequal or no length {lengths}")
+        (n,) = lengths
+        cols = {k: (np.asarray(v).tolist() if np.ndim(v) > 0 else [v] * n) for k, v in columns.items()}
+        self._stream(stream).extend(cols, n)
+
+    def _stream(self, name: str) -> _Stream:
+        if name not in self._streams:
+            self._streams[name] = _Stream(self.out_dir / "timeseries" / name)
+        return self._streams[name]
+
+    def flush(self, metrics: dict[str, Any] | None = None) -> None:
+        """Write buffered rows as new chunks; rewrite ``metrics.json`` when given."""
+        for s in self._streams.values():
+            s.flush()
+        if metrics is not None:
+            self.write_json("metrics.json", metrics)
+        self._events.flush()
+
+    def close(self) -> None:
+        if not self.closed:
+            self.flush()
+            self._events.close()
+            self.closed = True

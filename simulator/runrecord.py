@@ -1,0 +1,92 @@
+"""Reading a run directory back (complete or partial): time series as numpy arrays (or pandas frames), events, metrics."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RunRecord", "load_run", "load_stream"]
+
+
+def load_stream(folder: Path) -> dict[str, np.ndarray]:
+    """Concatenate the chunks of one stream folder into one array per column (empty dict if none)."""
+    parts = sorted(Path(folder).glob("part-*.npz"))
+    if not parts:
+        return {}
+    chunks = []
+    for p in parts:
+        with np.load(p, allow_pickle=False) as z:
+            chunks.append({k: z[k] for k in z.files})
+    return {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}
+
+
+@dataclass
+class RunRecord:
+    """A run directory, loaded.
+
+    Attributes
+    ----------
+    path : Path
+    run : dict
+        Contents of ``run.json`` (seed, world, versions).
+    metrics : dict
+        Contents of ``metrics.json`` (``{}`` if the run died before the first flush).
+    events : list[dict]
+        Every event, in order. A truncated last line (a killed process) is skipped.
+    streams : dict[str, dict[str, np.ndarray]]
+        Time series by stream name, column name.
+    """
+
+    path: Path
+    run: dict[str, Any]
+    metrics: dict[str, Any]
+    events: list[dict[str, Any]]
+    streams: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+
+    @property
+    def status(self) -> str:
+        """How the run ended: ``completed``, ``interrupted``, ``error`` or ``unknown`` (killed: no run_end event)."""
+        for ev in reversed(self.events):
+            if ev.get("type") == "run_end":
+                return str(ev.get("status", "unknown"))
+        return "unknown"
+
+    def stream(self, name: str) -> dict[str, np.ndarray]:
+        if name not in self.streams:
+            raise KeyError(f"no stream {name!r} in {self.path} (have: {sorted(self.streams)})")
+        return self.streams[name]
+
+    def to_pandas(self, name: str):  # pragma: no cover - optional dependency
+        """The stream as a ``pandas.DataFrame`` (pandas is not a dependency of skytrack; install it to use this)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.stream(name))
+
+
+def load_run(path: str | Path) -> RunRecord:
+    """Load a (possibly partial) run directory."""
+    path = Path(path)
+    if not path.is_dir():
+        raise FileNotFoundError(f"no run directory at {path}")
+    run = json.loads((path / "run.json").read_text()) if (path / "run.json").exists() else {}
+    metrics = json.loads((path / "metrics.json").read_text()) if (path / "metrics.json").exists() else {}
+    events: list[dict[str, Any]] = []
+    ev_path = path / "events.jsonl"
+    if ev_path.exists():
+        for line in ev_path.read_text(encoding="utf-8").splitlines():
+            try:
+                events.append(json.loads(line))
+            except json.JSONDecodeError:
+                continue
+    streams = {}
+    ts = path / "timeseries"
+    if ts.is_dir():
+        for folder in sorted(p for p in ts.iterdir() if p.is_dir()):
+            data = load_stream(folder)
+            if data:
+                streams[folder.name] = data
+    return RunRecord(path=path, run=run, metrics=metrics, events=events, streams=streams)

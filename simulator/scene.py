@@ -1,0 +1,158 @@
+"""The PyBullet scene: a DIRECT-mode client with gravity, a ground plane, buildings and the road surface.
+
+Static geometry is batched: cuboid buildings become a few static *compound* bodies (``createCollisionShapeArray``, up to
+``chunk`` boxes each) and non-cuboid footprints one static concave mesh. Hundreds of separate static bodies would cost
+~0.2 ms per physics step in Bullet's broadphase (measured: 500 bodies 0.18 ms/step, one compound 0.002 ms/step); batched,
+a 500-building town adds nothing measurable to a step and builds in tens of milliseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pybullet as p
+import trimesh
+
+from worlds.geometry import Building
+
+__all__ = ["Scene", "SceneConfig", "BUILDING_RGBA", "GROUND_RGBA", "ROAD_RGBA"]
+
+BUILDING_RGBA = (0.72, 0.72, 0.75, 1.0)
+GROUND_RGBA = (0.36, 0.45, 0.33, 1.0)
+ROAD_RGBA = (0.22, 0.22, 0.24, 1.0)
+
+
+_UNIT_BOX = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+
+
+def _box_mesh(centres: np.ndarray, sizes: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (8N, 3) and faces (12N, 3) of N boxes with given centres, full sizes (m) and yaws (rad)."""
+    corners = np.asarray(_UNIT_BOX.vertices)[None] * sizes[:, None, :]  # (N, 8, 3)
+    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+    x, y = corners[..., 0], corners[..., 1]
+    corners = np.stack([c * x - s * y, s * x + c * y, corners[..., 2]], axis=-1) + centres[:, None, :]
+    faces = np.asarray(_UNIT_BOX.faces)[None] + 8 * np.arange(len(centres))[:, None, None]
+    return corners.reshape(-1, 3), faces.reshape(-1, 3)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SceneConfig:
+    """Static scene settings.
+
+    Attributes
+    ----------
+    physics_hz : int
+        Physics step rate, Hz.
+    gravity : float
+        Gravitational acceleration, m/s^2 (applied along -z).
+    ground_size : tuple[float, float]
+        Visual extent of the ground (x, y), m; collision is an infinite plane.
+    chunk : int
+        Maximum boxes per static compound body.
+    """
+
+    physics_hz: int = 240
+    gravity: float = 9.81
+    ground_size: tuple[float, float] = (2000.0, 2000.0)
+    chunk: int = 256
+
+    def __post_init__(self) -> None:
+        if self.physics_hz <= 0:
+            raise ValueError(f"SceneConfig.physics_hz must be > 0, got {self.physics_hz}")
+        if self.chunk < 1:
+            raise ValueError(f"SceneConfig.chunk must be >= 1, got {self.chunk}")
+
+
+@dataclass
+class Scene:
+    """A built PyBullet scene; ``occluders`` are the static bodies that block sight and radio."""
+
+    client: int
+    config: SceneConfig
+    ground_id: int
+    building_ids: list[int] = field(default_factory=list)
+    road_id: int | None = None
+
+    @classmethod
+    def create(cls, config: SceneConfig) -> "Scene":
+        client = p.connect(p.DIRECT)
+        p.resetSimulation(physicsClientId=client)
+        p.setGravity(0.0, 0.0, -config.gravity, physicsClientId=client)
+        p.setPhysicsEngineParameter(fixedTimeStep=1.0 / config.physics_hz, numSubSteps=0,
+                                    deterministicOverlappingPairs=1, physicsClientId=client)
+        plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=client)
+        sx, sy = config.ground_size
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=[sx / 2, sy / 2, 0.01], rgbaColor=GROUND_RGBA,
+                                  visualFramePosition=[0, 0, -0.01], physicsClientId=client)
+        ground = p.createMultiBody(0, plane, vis, physicsClientId=client)
+        p.changeDynamics(ground, -1, lateralFriction=1.0, physicsClientId=client)
+        return cls(client=client, config=config, ground_id=ground)
+
+    @property
+    def occluders(self) -> set[int]:
+        return {self.ground_id, *self.building_ids}
+
+    def add_buildings(self, buildings: Sequence[Building]) -> list[int]:
+        """Add buildings as batched static bodies; returns the new body ids."""
+        cuboids = [b for b in buildings if b.is_cuboid]
+        others = [b for b in buildings if not b.is_cuboid]
+        new: list[int] = []
+        for start in range(0, len(cuboids), self.config.chunk):
+            new.append(self._compound(cuboids[start:start + self.config.chunk]))
+        if others:
+            new.append(self._extruded(others))
+        self.building_ids.extend(new)
+        return new
+
+    def _compound(self, boxes: Sequence[Building]) -> int:
+        c = self.client
+        centres, halves, quats = [], [], []
+        for b in boxes:
+            centre, size, yaw = b.cuboid_params
+            centres.append(centre.tolist())
+            halves.append((size / 2).tolist())
+            quats.append(p.getQuaternionFromEuler([0, 0, yaw]))
+        n = len(boxes)
+        col = p.createCollisionShapeArray([p.GEOM_BOX] * n, halfExtents=halves, collisionFramePositions=centres,
+                                          collisionFrameOrientations=quats, physicsClientId=c)
+        # createVisualShapeArray crashes PyBullet 3.2.x beyond ~16 shapes: draw the chunk as one visual mesh instead.
+        verts, faces = _box_mesh(np.array(centres), 2 * np.array(halves),
+                                 np.array([b.cuboid_params[2] for b in boxes]))
+        vis = p.createVisualShape(p.GEOM_MESH, vertices=verts.tolist(), indices=faces.ravel().tolist(),
+                                  rgbaColor=list(BUILDING_RGBA), physicsClientId=c)
+        return p.createMultiBody(0, col, vis, physicsClientId=c)
+
+    def _extruded(self, buildings: Sequence[Building]) -> int:
+        import shapely
+
+        meshes = []
+        for b in buildings:
+            m = trimesh.creation.extrude_polygon(shapely.Polygon(b.footprint), b.height)
+            m.apply_translation([0, 0, b.base_z])
+            meshes.append(m)
+        mesh = trimesh.util.concatenate(meshes)
+        return self.add_static_mesh(mesh, BUILDING_RGBA, collision=True)
+
+    def add_static_mesh(self, mesh: trimesh.Trimesh, rgba: Sequence[float], collision: bool) -> int:
+        """Add one static triangle mesh (concave collision when ``collision``; visual only otherwise)."""
+        c = self.client
+        verts = np.asarray(mesh.vertices, dtype=float).tolist()
+        idx = np.asarray(mesh.faces, dtype=int).ravel().tolist()
+        col = (p.createCollisionShape(p.GEOM_MESH, vertices=verts, indices=idx, flags=p.GEOM_FORCE_CONCAVE_TRIMESH,
+                                      physicsClientId=c) if collision else -1)
+        vis = p.createVisualShape(p.GEOM_MESH, vertices=verts, indices=idx, rgbaColor=list(rgba), physicsClientId=c)
+        return p.createMultiBody(0, col, vis, physicsClientId=c)
+
+    def add_road_surface(self, mesh: trimesh.Trimesh) -> int:
+        """Add the road surface (visual only: cars drive on the ground plane's collision)."""
+        self.road_id = self.add_static_mesh(mesh, ROAD_RGBA, collision=False)
+        return self.road_id
+
+    def step(self) -> None:
+        p.stepSimulation(physicsClientId=self.client)
+
+    def close(self) -> None:
+        if p.isConnected(self.client):
+            p.disconnect(self.client)

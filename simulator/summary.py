@@ -1,0 +1,133 @@
+"""Metrics of a run, accumulated as it goes so a partial record has them too.
+
+``metrics.json`` holds ``sim_time_s``, ``wall_time_s``, ``real_time_factor``, ``seed``, event counts, and
+
+- ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
+  failures / fallbacks and solve time p50 / p95 (ms), standoff error (m) and, with several trackers, phase error (deg);
+- ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's estimate against truth — mean Euclidean
+  error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MetricsTracker"]
+
+
+class _Errors:
+    def __init__(self) -> None:
+        self.pos: list[float] = []
+        self.vel: list[float] = []
+        self.steps = 0
+
+    def summary(self) -> dict[str, float]:
+        pos, vel = np.asarray(self.pos), np.asarray(self.vel)
+        out: dict[str, float] = {"estimate_fraction": len(pos) / self.steps if self.steps else 0.0}
+        if pos.size:
+            out.update(position_error_mean_m=float(pos.mean()), position_rmse_m=float(np.sqrt(np.mean(pos ** 2))),
+                       velocity_error_mean_mps=float(vel.mean()), velocity_rmse_mps=float(np.sqrt(np.mean(vel ** 2))))
+        return out
+
+
+class MetricsTracker:
+    """Accumulates per-UAV and per-target metrics from an :class:`~simulator.assembly.Assembly` tick by tick."""
+
+    def __init__(self, seed: int, physics_hz: int) -> None:
+        self.seed = seed
+        self.physics_hz = physics_hz
+        self.asm: Any = None
+        self.errors: dict[int, _Errors] = defaultdict(_Errors)
+        self.min_sep: np.ndarray | None = None
+        self.standoff_err: dict[int, list[float]] = defaultdict(list)
+        self.phase_err: list[float] = []
+        self.standoffs: dict[int, float] = {}
+
+    def attach(self, asm: Any) -> None:
+        self.asm = asm
+        n = len(asm.uav_ids)
+        self.min_sep = np.full(n, np.inf)
+        world = asm.world_spec
+        for i, u in enumerate(world.uavs if world is not None else []):
+            g = u.autonomy.guidance
+            if g.type in ("vector_field", "nmpc", "orbit"):
+                self.standoffs[i] = g.standoff_m
+
+    def observe(self, tick: int, asm: Any) -> None:
+        due = [a.uav for a in asm.agents if tick % a.divisor == 0]
+        if due and asm.target_index is not None and asm.cars is not None:
+            st = asm.cars.state
+            k = asm.target_index
+            p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
+            for i in due:
+                err = self.errors[i]
+                err.steps += 1
+                est = asm.latest_estimates.get(i)
+                if est is not None:
+                    err.pos.append(float(np.linalg.norm(est.p_W[:2] - p_true)))
+                    err.vel.append(float(np.linalg.norm(est.v_W[:2] - v_true)))
+            if self.standoffs and asm.quads is not None:
+                q = asm.quads.state.p_W[:, :2]
+                for i in due:
+                    if i in self.standoffs:
+                        self.standoff_err[i].append(abs(float(np.linalg.norm(q[i] - p_true)) - self.standoffs[i]))
+                trackers = sorted(self.standoffs)
+                if len(trackers) >= 2 and due[0] == min(due):
+                    ang = np.sort(np.arctan2(q[trackers, 1] - p_true[1], q[trackers, 0] - p_true[0]))
+                    gaps = np.diff(np.concatenate([ang, ang[:1] + 2 * np.pi]))
+                    self.phase_err.append(float(np.degrees(np.mean(np.abs(gaps - 2 * np.pi / len(trackers))))))
+        if tick % asm.record_div == 0 and asm.quads is not None and len(asm.uav_ids) > 1:
+            pos = asm.quads.state.p_W
+            d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
+            np.fill_diagonal(d, np.inf)
+            self.min_sep = np.minimum(self.min_sep, d.min(axis=1))
+
+    def metrics(self, sim_time_s: float, wall_time_s: float, complete: bool) -> dict[str, Any]:
+        asm = self.asm
+        out: dict[str, Any] = {
+            "complete": complete,
+            "sim_time_s": float(sim_time_s),
+            "wall_time_s": float(wall_time_s),
+            "real_time_factor": float(sim_time_s / wall_time_s) if wall_time_s > 0 else float("nan"),
+            "seed": self.seed,
+        }
+        if asm is None:
+            return out
+        out["events"] = dict(asm.recorder.event_counts)
+        out["target_index"] = asm.target_index
+        uavs: dict[str, Any] = {}
+        for i, uid in enumerate(asm.uav_ids):
+            m: dict[str, Any] = {
+                "collisions": asm.event_counts_by_uav.get(("collision", i), 0),
+                "command_saturations": asm.event_counts_by_uav.get(("command_saturated", i), 0),
+            }
+            if self.min_sep is not None and np.isfinite(self.min_sep[i]):
+                m["min_separation_m"] = float(self.min_sep[i])
+            stats = getattr(asm.agents[i].agent.guidance, "stats", None) if i < len(asm.agents) else None
+            if stats is not None and hasattr(stats, "summary"):
+                s = stats.summary()
+                m.update(solver_calls=s.get("solves", 0), solver_failures=s.get("failures", 0),
+                         solver_fallbacks=s.get("fallbacks_shifted", 0) + s.get("fallbacks_vector_field", 0),
+                         solve_ms_p50=s.get("solve_ms_p50"), solve_ms_p95=s.get("solve_ms_p95"))
+            if self.standoff_err.get(i):
+                m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
+            uavs[uid] = m
+        if self.phase_err:
+            out["phase_error_mean_deg"] = float(np.mean(self.phase_err))
+        out["uavs"] = uavs
+        if asm.target_index is not None and self.errors:
+            tid = asm.car_ids[asm.target_index]
+            out["targets"] = {tid: {asm.uav_ids[i]: e.summary() for i, e in sorted(self.errors.items())}}
+        return _finite_or_none(out)
+
+
+def _finite_or_none(obj: Any) -> Any:
+    """Replace NaN/inf by None so metrics.json is strict JSON."""
+    if isinstance(obj, dict):
+        return {k: _finite_or_none(v) for k, v in obj.items()}
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj

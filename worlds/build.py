@@ -1,0 +1,123 @@
+"""From a validated world to its static geometry: the road network, the buildings and the road-surface mesh.
+
+Roads come from exactly one source — explicit ``streets``, a procedural ``town`` or an ``osm`` extract — and buildings
+from the ``buildings`` list plus whatever the town or the extract holds. Problems are reported as
+:class:`worlds.errors.WorldError` naming the key path, before any physics starts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from worlds.errors import WorldError, WorldIssue
+from worlds.geometry import Building
+from worlds.roads.network import RoadNetwork
+from worlds.schema import World
+
+__all__ = ["WorldGeometry", "build_geometry", "resolve_map_path"]
+
+
+@dataclass(frozen=True)
+class WorldGeometry:
+    """Static geometry of a world.
+
+    Attributes
+    ----------
+    network : RoadNetwork | None
+        The road graph (None for worlds without roads).
+    buildings : list[Building]
+        Every building.
+    road_mesh : Any
+        ``trimesh.Trimesh`` of the road surface (None without roads).
+    """
+
+    network: RoadNetwork | None
+    buildings: list[Building]
+    road_mesh: Any
+
+
+def resolve_map_path(path: str, world_file: Path) -> Path:
+    """A map path as given, else relative to the world file, else under the package's ``assets/maps``."""
+    from importlib import resources
+
+    candidates = [Path(path), world_file.parent / path, Path(str(resources.files("assets"))) / "maps" / path]
+    for c in candidates:
+        if c.is_file():
+            return c
+    return candidates[1]
+
+
+def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> WorldGeometry:
+    """Build the road network and buildings of ``world`` (``world_file`` resolves relative map paths)."""
+    file = str(world_file)
+    roads = world.roads
+    network: RoadNetwork | None = None
+    buildings: list[Building] = []
+    where = "roads"
+    try:
+        if roads.streets:
+            spec = {"nodes": {k: list(v) for k, v in roads.nodes.items()},
+                    "streets": [s.model_dump() for s in roads.streets]}
+            network = RoadNetwork.from_spec(spec)
+            where = "roads.streets"
+        elif roads.town is not None:
+            from worlds.town import TownConfig, generate_town
+
+            where = "roads.town"
+            params = dict(roads.town.model_extra or {})
+            names = {f.name for f in dataclasses.fields(TownConfig)}
+            unknown = sorted(set(params) - names)
+            if unknown:
+                raise WorldError(file, [WorldIssue(f"roads.town.{unknown[0]}", params[unknown[0]],
+                                                   f"a TownConfig field ({', '.join(sorted(names))})")])
+            params = {k: tuple(v) if isinstance(v, list) else v for k, v in params.items()}
+            town = generate_town(TownConfig(**params), rng)
+            network, buildings = town.network, list(town.buildings)
+        elif roads.osm is not None:
+            from worlds.osm import load_osm
+
+            where = "roads.osm.path"
+            path = resolve_map_path(roads.osm.path, world_file)
+            town = load_osm(path, bbox=roads.osm.bbox, default_height=roads.osm.default_height)
+            network, buildings = town.network, list(town.buildings)
+    except WorldError:
+        raise
+    except (ValueError, TypeError, OSError) as exc:
+        raise WorldError(file, [WorldIssue(where, _value_at(world, where), f"a usable road source ({exc})")]) from None
+
+    for i, b in enumerate(world.buildings):
+        buildings.append(Building.cuboid(b.center, b.size, float(np.radians(b.yaw_deg)), name=f"b{i}"))
+
+    issues = []
+    if network is not None:
+        for i, g in enumerate(world.ground_vehicles):
+            ids = g.route.roads or [g.route.random_walk_from]
+            for k, rid in enumerate(ids):
+                if rid not in network.roads:
+                    key = f"ground_vehicles[{i}].route." + (f"roads[{k}]" if g.route.roads else "random_walk_from")
+                    sample = ", ".join(list(network.roads)[:6])
+                    issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; "
+                                                       f"a street 's' gives roads 's.f' and 's.r')"))
+    if issues:
+        raise WorldError(file, issues)
+
+    mesh = None
+    if network is not None:
+        from worlds.roads.mesh import road_surface_mesh
+
+        mesh = road_surface_mesh(network)
+    return WorldGeometry(network=network, buildings=buildings, road_mesh=mesh)
+
+
+def _value_at(world: World, dotted: str) -> Any:
+    node: Any = world
+    for part in dotted.split("."):
+        node = getattr(node, part, None)
+    if hasattr(node, "model_dump"):
+        return node.model_dump(exclude_none=True)
+    return node

@@ -1,0 +1,68 @@
+"""Whole-world checks the per-section schema cannot make: rates that divide the physics rate, unique ids, references."""
+
+from __future__ import annotations
+
+from collections import Counter
+from fractions import Fraction
+
+from worlds.errors import WorldIssue
+from worlds.schema import World
+
+__all__ = ["check_world", "rate_divisor"]
+
+
+def rate_divisor(rate_hz: float, physics_hz: int) -> int | None:
+    """Ticks between events of a component at ``rate_hz``, or None if ``rate_hz`` does not divide ``physics_hz``."""
+    if rate_hz <= 0:
+        return None
+    ratio = Fraction(physics_hz) / Fraction(rate_hz).limit_denominator(10**6)
+    if ratio.denominator != 1 or ratio.numerator < 1:
+        return None
+    return int(ratio.numerator)
+
+
+def _divisors_text(physics_hz: int) -> str:
+    divs = [d for d in range(1, physics_hz + 1) if physics_hz % d == 0]
+    return ", ".join(f"{physics_hz // d:g}" for d in divs[:12])
+
+
+def check_world(world: World) -> list[WorldIssue]:
+    """Return every cross-field problem of ``world`` (empty when it is consistent)."""
+    issues: list[WorldIssue] = []
+    hz = world.sim.physics_hz
+
+    def rate(path: str, value: float) -> None:
+        if rate_divisor(value, hz) is None:
+            issues.append(WorldIssue(path, value, f"a rate in Hz that divides sim.physics_hz={hz} into whole ticks "
+                                                  f"(e.g. {_divisors_text(hz)})"))
+
+    rate("sim.record_hz", world.sim.record_hz)
+    if world.render.enabled:
+        rate("render.fps", world.render.fps)
+    for i, uav in enumerate(world.uavs):
+        rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
+        rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)
+        for j, sensor in enumerate(uav.sensors):
+            rate(f"uavs[{i}].sensors[{j}].rate_hz", sensor.rate_hz)
+
+    for section, ids in (("uavs", [u.id for u in world.uavs]),
+                         ("ground_vehicles", [g.id for g in world.ground_vehicles]),
+                         ("decoys", [d.id for d in world.decoys])):
+        for name, count in Counter(ids).items():
+            if count > 1:
+                issues.append(WorldIssue(f"{section}[{ids.index(name)}].id", name, "ids unique within their section"))
+
+    vehicle_ids = {g.id for g in world.ground_vehicles}
+    for k, tid in enumerate(world.targets or []):
+        if tid not in vehicle_ids:
+            issues.append(WorldIssue(f"targets[{k}]", tid, f"the id of a ground vehicle ({sorted(vehicle_ids) or 'none defined'})"))
+
+    has_roads = bool(world.roads.streets or world.roads.osm or world.roads.town)
+    for i, g in enumerate(world.ground_vehicles):
+        if not has_roads:
+            issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
+                                     "a road network in 'roads' for the vehicle to drive on"))
+    for i, o in enumerate(world.comms.outages):
+        if o.end_s <= o.start_s:
+            issues.append(WorldIssue(f"comms.outages[{i}].end_s", o.end_s, f"a time after start_s={o.start_s}"))
+    return issues

@@ -1,0 +1,286 @@
+"""The world-file schema: pydantic models for every section of a world file.
+
+Every model forbids unknown keys, so a typo is an error, not a silently ignored setting. Units: SI, except angles, which
+world files give in degrees (``*_deg`` keys) and the code converts at load. Cross-field checks that need the whole world
+(rates dividing the physics rate, references between sections) live in :mod:`worlds.checks`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+__all__ = [
+    "World", "SimSection", "EnvironmentSection", "WindSection", "TurbulenceSection", "TerrainSection", "RoadsSection",
+    "StreetSpec", "BuildingSpec", "TownSection", "GroundVehicleSpec", "RouteSpec", "UavSpec", "InitialPose",
+    "SensorSpec", "RadarSpec", "CameraSpec", "BearingSpec", "BoxSpec", "AutonomySpec", "EstimatorSpec", "GuidanceSpec",
+    "CommsSection", "RenderSection", "OsmSection", "OutageSpec", "DecoySpec",
+]
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegFloat = Annotated[float, Field(ge=0)]
+Vec2 = tuple[float, float]
+Vec3 = tuple[float, float, float]
+
+
+class Strict(BaseModel):
+    """Base for every section: unknown keys are errors; values are checked on assignment too."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+
+
+class SimSection(Strict):
+    physics_hz: int = Field(240, gt=0, description="physics step rate, Hz; every other rate must divide it")
+    duration_s: PositiveFloat = Field(60.0, description="simulated duration, s")
+    seed: int = Field(0, ge=0, description="root of the run's SeedSequence")
+    record_hz: int = Field(20, gt=0, description="rate at which truth / estimates / commands are recorded, Hz")
+    flush_every_s: PositiveFloat = Field(2.0, description="simulated seconds between flushes of the run record to disk")
+
+
+class TurbulenceSection(Strict):
+    sigma: NonNegFloat = Field(1.0, description="turbulence intensity (std of each gust component), m/s")
+    length_scale: PositiveFloat = Field(50.0, description="Dryden length scale, m")
+
+
+class WindSection(Strict):
+    mean_W: Vec3 = Field((0.0, 0.0, 0.0), description="constant wind in the world frame (ENU), m/s")
+    turbulence: TurbulenceSection | None = None
+
+
+class EnvironmentSection(Strict):
+    gravity: PositiveFloat = Field(9.81, description="gravitational acceleration, m/s^2")
+    wind: WindSection | None = None
+    downwash: bool = False
+    ground_effect: bool = False
+
+
+class TerrainSection(Strict):
+    kind: Literal["flat"] = "flat"
+    size: Vec2 = Field((2000.0, 2000.0), description="extent of the ground plane (x, y), m")
+
+    @model_validator(mode="after")
+    def _positive(self) -> "TerrainSection":
+        if min(self.size) <= 0:
+            raise ValueError(f"size must be positive, got {list(self.size)}")
+        return self
+
+
+class StreetSpec(Strict):
+    id: str
+    nodes: tuple[str, str]
+    via: list[Vec2] = Field(default_factory=list, description="intermediate centre-line vertices, m")
+    lanes: int = Field(1, ge=1, description="lanes per direction")
+    lane_width: PositiveFloat = 3.5
+    speed_limit: PositiveFloat = Field(13.9, description="m/s")
+    two_way: bool = True
+
+
+class OsmSection(Strict):
+    path: str = Field(description="an .osm.pbf or .osm file; relative paths resolve against the world file, then assets/maps")
+    bbox: tuple[float, float, float, float] | None = Field(None, description="lon_min, lat_min, lon_max, lat_max")
+    default_height: PositiveFloat = Field(9.0, description="height of buildings without height tags, m")
+
+
+class TownSection(Strict):
+    """Procedural town; fields map onto ``worlds.town.TownConfig`` (unknown fields are rejected there)."""
+
+    model_config = ConfigDict(extra="allow")
+
+
+class RoadsSection(Strict):
+    nodes: dict[str, Vec2] = Field(default_factory=dict, description="junction positions, m")
+    streets: list[StreetSpec] = Field(default_factory=list)
+    osm: OsmSection | None = None
+    town: TownSection | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "RoadsSection":
+        sources = [bool(self.streets), self.osm is not None, self.town is not None]
+        if sum(sources) > 1:
+            raise ValueError("give roads as streets, osm or town: at most one of them")
+        for st in self.streets:
+            for n in st.nodes:
+                if n not in self.nodes:
+                    raise ValueError(f"street {st.id!r} names node {n!r}, which is not in roads.nodes")
+        return self
+
+
+class BuildingSpec(Strict):
+    center: Vec2 = Field(description="footprint centre (x, y), m")
+    size: Vec3 = Field(description="(length along yaw, width, height), m")
+    yaw_deg: float = 0.0
+
+    @model_validator(mode="after")
+    def _positive(self) -> "BuildingSpec":
+        if min(self.size) <= 0:
+            raise ValueError(f"size must be positive in every axis, got {list(self.size)}")
+        return self
+
+
+class RouteSpec(Strict):
+    roads: list[str] | None = Field(None, description="a fixed sequence of road ids")
+    random_walk_from: str | None = Field(None, description="start road of a seeded random walk over the network")
+    stop_at_junctions: bool = True
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> "RouteSpec":
+        if (self.roads is None) == (self.random_walk_from is None):
+            raise ValueError("give exactly one of 'roads' or 'random_walk_from'")
+        return self
+
+
+class GroundVehicleSpec(Strict):
+    id: str
+    type: str = Field("sedan", description="car parameter file name (vehicles/cars)")
+    role: Literal["target", "decoy", "traffic"] = "target"
+    route: RouteSpec
+    driver: dict[str, Any] = Field(default_factory=dict, description="overrides of the driver configuration")
+
+
+class InitialPose(Strict):
+    position: Vec3 = Field(description="initial position (ENU), m")
+    yaw_deg: float = 0.0
+
+
+class SensorBase(Strict):
+    id: str | None = None
+    rate_hz: PositiveFloat = Field(description="measurement rate, Hz; must divide sim.physics_hz")
+    latency_s: NonNegFloat = 0.0
+
+
+class RadarSpec(SensorBase):
+    type: Literal["radar"]
+    sigma_range: PositiveFloat = Field(20.0, description="m")
+    sigma_azimuth_deg: PositiveFloat = 1.0
+    sigma_elevation_deg: PositiveFloat = 1.0
+    sigma_range_rate: PositiveFloat | None = Field(None, description="m/s; None = no range-rate channel")
+    max_range: PositiveFloat = 5000.0
+    pd: float = Field(0.9, gt=0, le=1, description="detection probability at the reference range")
+    pd_reference_range: PositiveFloat = 1000.0
+    min_detectable_velocity: NonNegFloat = Field(0.0, description="GMTI Doppler notch, m/s")
+    clutter_rate: NonNegFloat = Field(0.0, description="mean false alarms per scan")
+    options: dict[str, Any] = Field(default_factory=dict, description="further RadarConfig fields")
+
+
+class CameraSpec(SensorBase):
+    type: Literal["camera"]
+    width: int = Field(160, gt=0)
+    height: int = Field(120, gt=0)
+    hfov_deg: float = Field(60.0, gt=0, lt=180)
+    pitch_deg: float = Field(-45.0, description="gimbal pitch, negative = down")
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+class BearingSpec(SensorBase):
+    type: Literal["bearing"]
+    sigma_deg: PositiveFloat = 1.0
+    max_range: PositiveFloat = 5000.0
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+class BoxSpec(SensorBase):
+    type: Literal["box"]
+    opening_deg: float = Field(60.0, gt=0, lt=180)
+    half_width: PositiveFloat = Field(5.0, description="half side of the bounded-error box, m")
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+SensorSpec = Annotated[RadarSpec | CameraSpec | BearingSpec | BoxSpec, Field(discriminator="type")]
+
+
+class EstimatorSpec(Strict):
+    type: str = Field("ekf", description="ekf | ukf | ckf | scif | imm, or 'plugin'")
+    model: str = Field("cv", description="motion model: cv | ca | singer | ct")
+    plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _plugin(self) -> "EstimatorSpec":
+        if (self.type == "plugin") != (self.plugin is not None):
+            raise ValueError("type 'plugin' and the 'plugin' import path go together")
+        if self.plugin is not None and ":" not in self.plugin:
+            raise ValueError(f"plugin must look like 'package.module:Class', got {self.plugin!r}")
+        return self
+
+
+class GuidanceSpec(Strict):
+    type: str = Field("hold", description="hold | orbit | vector_field | nmpc | waypoints, or 'plugin'")
+    plugin: str | None = None
+    standoff_m: PositiveFloat = 100.0
+    speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
+    altitude: PositiveFloat = Field(60.0, description="m")
+    waypoints: list[Vec3] = Field(default_factory=list)
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _plugin(self) -> "GuidanceSpec":
+        if (self.type == "plugin") != (self.plugin is not None):
+            raise ValueError("type 'plugin' and the 'plugin' import path go together")
+        if self.plugin is not None and ":" not in self.plugin:
+            raise ValueError(f"plugin must look like 'package.module:Class', got {self.plugin!r}")
+        return self
+
+
+class AutonomySpec(Strict):
+    rate_hz: PositiveFloat = Field(10.0, description="agent decision rate, Hz; must divide sim.physics_hz")
+    estimator: EstimatorSpec = Field(default_factory=EstimatorSpec)
+    guidance: GuidanceSpec = Field(default_factory=GuidanceSpec)
+
+
+class UavSpec(Strict):
+    id: str
+    airframe: str = "survey_quad"
+    initial: InitialPose
+    outer_loop_hz: int = Field(48, gt=0, description="velocity/position loop rate, Hz; must divide sim.physics_hz")
+    sensors: list[SensorSpec] = Field(default_factory=list)
+    autonomy: AutonomySpec = Field(default_factory=AutonomySpec)
+
+
+class OutageSpec(Strict):
+    link: tuple[str, str]
+    start_s: NonNegFloat
+    end_s: NonNegFloat
+
+
+class CommsSection(Strict):
+    model: Literal["perfect", "rayleigh"] = "perfect"
+    reference_distance: PositiveFloat = Field(1000.0, description="d0 in Pr(d) = exp(-(d/d0)^3), m")
+    max_range: PositiveFloat | None = None
+    line_of_sight: bool = False
+    latency_s: NonNegFloat = 0.0
+    base_station: Vec3 | None = None
+    outages: list[OutageSpec] = Field(default_factory=list)
+
+
+class RenderSection(Strict):
+    enabled: bool = False
+    width: int = Field(1280, gt=0)
+    height: int = Field(720, gt=0)
+    fps: int = Field(30, gt=0)
+    camera: Literal["chase", "orbit", "top_down", "onboard", "split"] = "top_down"
+
+
+class DecoySpec(Strict):
+    id: str
+    position: Vec3 = Field(description="m")
+    yaw_deg: float = Field(0.0, description="direction the decoy is visible from (axis of its visibility cone)")
+    cone_half_angle_deg: float = Field(45.0, gt=0, le=180, description="half-angle of the visibility cone")
+
+
+class World(Strict):
+    """A whole world file."""
+
+    name: str = "unnamed"
+    description: str = ""
+    sim: SimSection = Field(default_factory=SimSection)
+    environment: EnvironmentSection = Field(default_factory=EnvironmentSection)
+    terrain: TerrainSection = Field(default_factory=TerrainSection)
+    roads: RoadsSection = Field(default_factory=RoadsSection)
+    buildings: list[BuildingSpec] = Field(default_factory=list)
+    ground_vehicles: list[GroundVehicleSpec] = Field(default_factory=list)
+    targets: list[str] | None = Field(None, description="ids of ground vehicles the team tracks (default: role target)")
+    decoys: list[DecoySpec] = Field(default_factory=list)
+    uavs: list[UavSpec] = Field(default_factory=list)
+    comms: CommsSection = Field(default_factory=CommsSection)
+    render: RenderSection = Field(default_factory=RenderSection)

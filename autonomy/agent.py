@@ -61,12 +61,16 @@ class Agent:
         Target estimator (built-in tracker or a user's class).
     guidance : GuidanceLaw
         Guidance law (built-in or a user's class).
+    idle : GuidanceLaw | None
+        Flown while there is no target estimate (e.g. hold a search point); None hands ``target=None`` to ``guidance``.
     """
 
-    def __init__(self, uav_id: str, estimator: TargetEstimator, guidance: GuidanceLaw) -> None:
+    def __init__(self, uav_id: str, estimator: TargetEstimator, guidance: GuidanceLaw,
+                 idle: GuidanceLaw | None = None) -> None:
         self.uav_id = uav_id
         self.estimator = estimator
         self.guidance = guidance
+        self.idle = idle
         self._pending: list[Detection] = []
         self.estimate: TargetEstimate | None = None
 
@@ -79,5 +83,6 @@ class Agent:
         ready = sorted((d for d in self._pending if d.t_arrival <= t + 1e-9), key=lambda d: d.t_meas)
         self._pending = [d for d in self._pending if d.t_arrival > t + 1e-9]
         self.estimate = self.estimator.step(t, ready)
-        setpoint = self.guidance.command(own, self.estimate, teammates, t)
+        law = self.idle if self.estimate is None and self.idle is not None else self.guidance
+        setpoint = law.command(own, self.estimate, teammates, t)
         return AgentOutput(setpoint=setpoint, estimate=self.estimate, used_detections=len(ready))

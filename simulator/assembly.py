@@ -14,7 +14,7 @@ from autonomy.guidance.types import OwnState, TeammateState
 from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
-from simulator.factories import build_estimator, build_guidance, build_sensor
+from simulator.factories import build_estimator, build_guidance, build_idle_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery
@@ -98,12 +98,11 @@ class Assembly:
         for f in fleets:                       # 3. low-level controllers
             f.after_step(tick)
         t = self.clock.time(tick)
-        if self.sensors:                       # 4. sensors
+        due = [slot for slot in self.sensors if tick % slot.divisor == 0]
+        if due:                                # 4. sensors
             truth = self.target_truth()
-            for slot in self.sensors:
-                if tick % slot.divisor:
-                    continue
-                st = self.quads.state
+            st = self.quads.state
+            for slot in due:
                 pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav])
                 out = slot.sensor.measure(t, pose, truth, self.scene_query, slot.rng)
                 self._record_detections(tick, t, slot, out)
@@ -252,7 +251,7 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         for j, spec in enumerate(u.sensors):
             name = spec.id or f"{u.id}/{spec.type}{j}"
             where = f"uavs[{i}].sensors[{j}]"
-            sensor = _checked(loaded, where, spec, lambda: build_sensor(spec, name))
+            sensor = _checked(loaded, where, spec, lambda: build_sensor(spec, name, geometry.buildings))
             sensors.append(SensorSlot(uav=i, sensor=sensor, name=name, divisor=clock.divisor(spec.rate_hz, where),
                                       rng=seeds.generator(f"sensor/{u.id}/{j}")))
         if options.estimator_factory is not None:
@@ -265,7 +264,8 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
                                 lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
-        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance),
+        idle = None if options.guidance_factory is not None else build_idle_guidance(u)
+        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, idle),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents)
 

@@ -18,15 +18,18 @@ __all__ = ["main"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from simulator.engine import RunOptions, run_world
     from worlds.loader import load_world
 
     loaded = load_world(args.world, args.set or [])  # WorldError is reported by main() before PyBullet starts
+
+    from simulator.engine import RunOptions, run_world
     out = Path(args.out) if args.out else Path("runs") / loaded.world.name
     opts = RunOptions(duration_s=args.duration, seed=args.seed, out_dir=out, progress=not args.quiet,
                       plots=not args.no_plots)
     result = run_world(loaded, opts)
     _print_summary(result.metrics, out)
+    if result.error:
+        print(f"skytrack: run failed: {result.error} (traceback in {out / 'events.jsonl'})", file=sys.stderr)
     if result.status == "interrupted":
         return 130
     return 0 if result.status == "completed" else 1

@@ -114,8 +114,9 @@ class RunRecorder:
         return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
 
     # -- events ----------------------------------------------------------------------------------------------------
-    def event(self, type: str, tick: int | None = None, t: float | None = None, **fields: Any) -> None:
-        """Append one event line (flushed at once)."""
+    def event(self, type: str, tick: int | None = None, t: float | None = None, /, **fields: Any) -> None:
+        """Append one event line (flushed at once); ``fields`` may not redefine ``type``, ``tick`` or ``t``."""
+        fields = {k: v for k, v in fields.items() if k not in ("type", "tick", "t")}
         rec = {"type": type, "tick": tick, "t": t, **fields, "wall": round(time.time(), 3)}
         self._events.write(json.dumps(rec, default=json_default) + "\n")
         self.event_counts[type] = self.event_counts.get(type, 0) + 1

@@ -15,7 +15,7 @@ __all__ = [
     "World", "SimSection", "EnvironmentSection", "WindSection", "TurbulenceSection", "TerrainSection", "RoadsSection",
     "StreetSpec", "BuildingSpec", "TownSection", "GroundVehicleSpec", "RouteSpec", "UavSpec", "InitialPose",
     "SensorSpec", "RadarSpec", "CameraSpec", "BearingSpec", "BoxSpec", "AutonomySpec", "EstimatorSpec", "GuidanceSpec",
-    "CommsSection", "RenderSection", "OsmSection", "OutageSpec", "DecoySpec",
+    "CommsSection", "RenderSection", "OsmSection", "OutageSpec", "DecoySpec", "FovSpec",
 ]
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -143,82 +143,113 @@ class InitialPose(Strict):
     yaw_deg: float = 0.0
 
 
+class FovSpec(Strict):
+    """Field of regard; angles in degrees (see ``autonomy.sensing.fov.FieldOfRegard``)."""
+
+    frame: Literal["all_round", "world", "heading", "body"] = "all_round"
+    azimuth_limits_deg: Vec2 = (-180.0, 180.0)
+    elevation_limits_deg: Vec2 = (-90.0, 90.0)
+
+
 class SensorBase(Strict):
+    """Fields left out (None) take the sensor model's own defaults, documented in ``autonomy.sensing``."""
+
     id: str | None = None
     rate_hz: PositiveFloat = Field(description="measurement rate, Hz; must divide sim.physics_hz")
-    latency_s: NonNegFloat = 0.0
+    latency_s: NonNegFloat | None = None
 
 
 class RadarSpec(SensorBase):
+    """GMTI radar (``autonomy.sensing.radar.RadarConfig``)."""
+
     type: Literal["radar"]
-    sigma_range: PositiveFloat = Field(20.0, description="m")
-    sigma_azimuth_deg: PositiveFloat = 1.0
-    sigma_elevation_deg: PositiveFloat = 1.0
-    sigma_range_rate: PositiveFloat | None = Field(None, description="m/s; None = no range-rate channel")
-    max_range: PositiveFloat = 5000.0
-    pd: float = Field(0.9, gt=0, le=1, description="detection probability at the reference range")
-    pd_reference_range: PositiveFloat = 1000.0
-    min_detectable_velocity: NonNegFloat = Field(0.0, description="GMTI Doppler notch, m/s")
-    clutter_rate: NonNegFloat = Field(0.0, description="mean false alarms per scan")
-    options: dict[str, Any] = Field(default_factory=dict, description="further RadarConfig fields")
+    sigma_range: PositiveFloat = Field(description="m")
+    sigma_azimuth_deg: PositiveFloat
+    sigma_elevation_deg: PositiveFloat
+    sigma_range_rate: PositiveFloat | None = Field(None, description="m/s; omit for no range-rate channel")
+    fov: FovSpec | None = None
+    max_range: PositiveFloat | None = Field(None, description="m")
+    pd_ref: float | None = Field(None, gt=0, le=1, description="detection probability at range_ref")
+    range_ref: PositiveFloat | None = Field(None, description="m")
+    pfa: float | None = Field(None, gt=0, lt=1)
+    min_detectable_velocity: NonNegFloat | None = Field(None, description="GMTI Doppler notch, m/s")
+    clutter_rate: NonNegFloat | None = Field(None, description="mean false alarms per scan")
+    clutter_range_rate_max: NonNegFloat | None = Field(None, description="m/s")
 
 
 class CameraSpec(SensorBase):
+    """Gimballed camera with a colour detector (``autonomy.sensing.camera.CameraConfig``)."""
+
     type: Literal["camera"]
-    width: int = Field(160, gt=0)
-    height: int = Field(120, gt=0)
-    hfov_deg: float = Field(60.0, gt=0, lt=180)
-    pitch_deg: float = Field(-45.0, description="gimbal pitch, negative = down")
-    options: dict[str, Any] = Field(default_factory=dict)
+    width: int | None = Field(None, gt=0)
+    height: int | None = Field(None, gt=0)
+    hfov_deg: float | None = Field(None, gt=0, lt=180)
+    gimbal_pitch_deg: float | None = Field(None, description="depression below the horizon, degrees")
+    stabilised: bool | None = None
+    pixel_sigma: NonNegFloat | None = None
+    near: PositiveFloat | None = None
+    far: PositiveFloat | None = None
+    min_blob_area_px: int | None = Field(None, gt=0)
 
 
 class BearingSpec(SensorBase):
+    """Bearing-only sensor (``autonomy.sensing.bearing.BearingConfig``)."""
+
     type: Literal["bearing"]
-    sigma_deg: PositiveFloat = 1.0
-    max_range: PositiveFloat = 5000.0
-    options: dict[str, Any] = Field(default_factory=dict)
+    sigma_azimuth_deg: PositiveFloat
+    sigma_elevation_deg: PositiveFloat | None = None
+    fov: FovSpec | None = None
+    max_range: PositiveFloat | None = None
+    pd: float | None = Field(None, gt=0, le=1)
 
 
 class BoxSpec(SensorBase):
+    """Bounded-error position sensor with a nadir footprint (``autonomy.sensing.box_sensor.BoxSensorConfig``)."""
+
     type: Literal["box"]
-    opening_deg: float = Field(60.0, gt=0, lt=180)
-    half_width: PositiveFloat = Field(5.0, description="half side of the bounded-error box, m")
-    options: dict[str, Any] = Field(default_factory=dict)
+    opening_angle_deg: float | None = Field(None, gt=0, lt=180)
+    noise_bound: PositiveFloat | None = Field(None, description="half side of the error box, m")
+    footprint_frame: Literal["heading", "world"] | None = None
 
 
 SensorSpec = Annotated[RadarSpec | CameraSpec | BearingSpec | BoxSpec, Field(discriminator="type")]
 
 
+def _check_plugin(kind: str, plugin: str | None) -> None:
+    if (kind == "plugin") != (plugin is not None):
+        raise ValueError("type 'plugin' and the 'plugin' import path go together")
+    if plugin is not None and ":" not in plugin:
+        raise ValueError(f"plugin must look like 'package.module:Class', got {plugin!r}")
+
+
 class EstimatorSpec(Strict):
-    type: str = Field("ekf", description="ekf | ukf | ckf | scif | imm, or 'plugin'")
-    model: str = Field("cv", description="motion model: cv | ca | singer | ct")
+    type: Literal["ekf", "ukf", "ckf", "scif", "plugin"] = "ekf"
+    model: Literal["cv", "singer"] = "cv"
     plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
-    params: dict[str, Any] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="TrackerConfig fields, or keyword arguments of a plugin class")
 
     @model_validator(mode="after")
     def _plugin(self) -> "EstimatorSpec":
-        if (self.type == "plugin") != (self.plugin is not None):
-            raise ValueError("type 'plugin' and the 'plugin' import path go together")
-        if self.plugin is not None and ":" not in self.plugin:
-            raise ValueError(f"plugin must look like 'package.module:Class', got {self.plugin!r}")
+        _check_plugin(self.type, self.plugin)
         return self
 
 
 class GuidanceSpec(Strict):
-    type: str = Field("hold", description="hold | orbit | vector_field | nmpc | waypoints, or 'plugin'")
-    plugin: str | None = None
-    standoff_m: PositiveFloat = 100.0
+    type: Literal["hold", "waypoints", "vector_field", "nmpc", "plugin"] = "hold"
+    plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
+    standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
     speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
     altitude: PositiveFloat = Field(60.0, description="m")
-    waypoints: list[Vec3] = Field(default_factory=list)
-    params: dict[str, Any] = Field(default_factory=dict)
+    waypoints: list[Vec3] = Field(default_factory=list, description="for type waypoints, m")
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="further fields of the law's config, or keyword arguments of a plugin")
 
     @model_validator(mode="after")
     def _plugin(self) -> "GuidanceSpec":
-        if (self.type == "plugin") != (self.plugin is not None):
-            raise ValueError("type 'plugin' and the 'plugin' import path go together")
-        if self.plugin is not None and ":" not in self.plugin:
-            raise ValueError(f"plugin must look like 'package.module:Class', got {self.plugin!r}")
+        _check_plugin(self.type, self.plugin)
+        if self.type == "waypoints" and not self.waypoints:
+            raise ValueError("type 'waypoints' needs a non-empty 'waypoints' list")
         return self
 
 

@@ -14,7 +14,7 @@ uavs:
   - id: u1
     initial: {position: [0, 0, 30]}
     sensors:
-      - {type: radar, rate_hz: 2}
+      - {type: radar, rate_hz: 2, sigma_range: 20, sigma_azimuth_deg: 1, sigma_elevation_deg: 1}
 """
 
 

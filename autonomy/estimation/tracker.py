@@ -1,0 +1,214 @@
+"""Single-target tracking around any filter: track initiation, χ² gating, nearest-neighbour association, coasting, loss.
+
+The tracker is what an agent calls at its rate (:class:`autonomy.agent.TargetEstimator`). Detections arrive in
+``t_meas`` order; the filter predicts to each one's own time stamp. Association is global nearest neighbour per scan
+(detections sharing ``t_meas`` and ``sensor_id``): the detection with the smallest NIS inside the gate updates the track.
+A track that has seen no gated detection for ``lost_after_s`` is dropped and re-initiated from the next detection.
+
+Initiation is two-point: each radar or box detection is inverted to a ground position fix (radar range and azimuth to a
+point on the target plane) and kept as a tentative fix; a fix of a later scan that lies within
+``max_target_speed · Δt`` plus a 3σ margin of a tentative one confirms a track, with the position of the newer fix and the
+velocity of the pair. A lone false alarm therefore never starts a track, and clutter pairs are rare when false alarms
+are spread over the radar's whole field of regard.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import gammaincinv
+
+from autonomy.estimation.factory import make_filter
+from autonomy.estimation.measurements import measurement_model
+from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
+from autonomy.guidance.types import TargetEstimate
+
+__all__ = ["TrackerConfig", "SingleTargetTracker", "make_motion_model"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackerConfig:
+    """Single-target tracker settings.
+
+    Attributes
+    ----------
+    filter : str
+        ``ekf``, ``ukf``, ``ckf`` or ``scif``.
+    model : str
+        Motion model: ``cv`` (nearly constant velocity) or ``singer``.
+    q : float
+        CV: white-acceleration spectral density (m²/s³), > 0.
+    singer_alpha : float
+        Singer: manoeuvre decorrelation rate (1/s), > 0.
+    singer_sigma_a : float
+        Singer: acceleration standard deviation (m/s²), > 0.
+    gate_probability : float
+        Probability mass of the χ² validation gate, in (0, 1).
+    max_target_speed : float
+        Fastest plausible target (m/s), > 0: bounds the distance between two fixes that confirm a track.
+    tentative_window_s : float
+        How long a tentative fix waits for its confirming partner (s), > 0.
+    lost_after_s : float
+        Drop the track after this long without a gated detection (s), > 0.
+    target_height : float
+        Height of the ground targets (m).
+    """
+
+    filter: str = "ekf"
+    model: str = "cv"
+    q: float = 1.0
+    singer_alpha: float = 0.1
+    singer_sigma_a: float = 1.0
+    gate_probability: float = 0.999
+    max_target_speed: float = 30.0
+    tentative_window_s: float = 3.0
+    lost_after_s: float = 10.0
+    target_height: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.filter not in ("ekf", "ukf", "ckf", "scif"):
+            raise ValueError(f"TrackerConfig.filter must be ekf|ukf|ckf|scif, got {self.filter!r}")
+        if self.model not in ("cv", "singer"):
+            raise ValueError(f"TrackerConfig.model must be cv|singer, got {self.model!r}")
+        for name in ("q", "singer_alpha", "singer_sigma_a", "max_target_speed", "tentative_window_s", "lost_after_s"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0 < self.gate_probability < 1:
+            raise ValueError(f"TrackerConfig.gate_probability must be in (0, 1), got {self.gate_probability!r}")
+
+
+def make_motion_model(cfg: TrackerConfig) -> MotionModel:
+    """The configured 2-D motion model."""
+    if cfg.model == "cv":
+        return ConstantVelocity(q=cfg.q, dim=2)
+    return Singer(alpha=cfg.singer_alpha, sigma_a=cfg.singer_sigma_a, dim=2)
+
+
+def _ground_fix(det: object, target_height: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(x, y) position and its 2x2 covariance from one detection, or None if it cannot fix a position alone."""
+    z = np.asarray(det.z, dtype=float)
+    R = np.asarray(det.R, dtype=float)
+    if det.kind == "box":
+        return z[:2].copy(), R[:2, :2].copy()
+    if det.kind != "radar" or z.size < 2:
+        return None
+    p_s = np.asarray(det.p_sensor_W, dtype=float)
+    rng, az = z[0], z[1]
+    dz = target_height - p_s[2]
+    rho2 = rng * rng - dz * dz
+    rho = np.sqrt(rho2) if rho2 > 0 else 0.0
+    xy = p_s[:2] + rho * np.array([np.cos(az), np.sin(az)])
+    # first-order covariance: range error along the line of sight (scaled by r/rho), azimuth error across it
+    along = (rng / rho) if rho > 1e-6 else 1.0
+    J = np.array([[np.cos(az) * along, -rho * np.sin(az)], [np.sin(az) * along, rho * np.cos(az)]])
+    P = J @ R[:2, :2] @ J.T
+    return xy, P
+
+
+class SingleTargetTracker:
+    """Tracks one ground target from detections of any kind the estimation layer models."""
+
+    def __init__(self, config: TrackerConfig) -> None:
+        self.config = config
+        self.model = make_motion_model(config)
+        self.layout = self.model.layout
+        self.filter = None
+        self.last_update_t = -np.inf
+        self._ix = [self.layout.index("x"), self.layout.index("y")]
+        self._iv = [self.layout.index("vx"), self.layout.index("vy")]
+        self.gated_out = 0
+        self.updates = 0
+        self.initiations = 0
+        self._gates: dict[int, float] = {}
+        self._tentative: list[tuple[float, np.ndarray, np.ndarray]] = []
+
+    def _initiate(self, dets: Sequence[object]) -> bool:
+        """Try to confirm a track from this scan's fixes and the tentative fixes of earlier scans; keep the new fixes."""
+        cfg = self.config
+        fixes = [(d, f) for d in dets if (f := _ground_fix(d, cfg.target_height)) is not None]
+        if not fixes:
+            return False
+        t_now = fixes[0][0].t_meas
+        self._tentative = [tf for tf in self._tentative if 0 < t_now - tf[0] <= cfg.tentative_window_s]
+        best = None
+        for det, (xy, Pxy) in fixes:
+            for t_old, xy_old, P_old in self._tentative:
+                dt = t_now - t_old
+                gap = float(np.linalg.norm(xy - xy_old))
+                margin = 3.0 * float(np.sqrt(np.linalg.eigvalsh(Pxy + P_old).max()))
+                if gap <= cfg.max_target_speed * dt + margin and (best is None or gap < best[0]):
+                    best = (gap, det, xy, Pxy, (xy - xy_old) / dt, (Pxy + P_old) / dt ** 2)
+        if best is None:
+            self._tentative.extend((t_now, xy, Pxy) for _, (xy, Pxy) in fixes)
+            return False
+        _, det, xy, Pxy, v, Pv = best
+        n = self.model.n
+        x0 = np.zeros(n)
+        P0 = np.zeros((n, n))
+        x0[self._ix], x0[self._iv] = xy, v
+        P0[np.ix_(self._ix, self._ix)] = Pxy + np.eye(2) * 1e-6
+        P0[np.ix_(self._iv, self._iv)] = Pv + np.eye(2) * 1e-6
+        for name in ("ax", "ay"):
+            if name in self.layout:
+                i = self.layout.index(name)
+                P0[i, i] = 4.0
+        self.filter = make_filter(cfg.filter, self.model, x0, P0, det.t_meas, target_height=cfg.target_height)
+        self.last_update_t = det.t_meas
+        self._tentative = []
+        self.initiations += 1
+        return True
+
+    def _gate(self, dof: int) -> float:
+        if dof not in self._gates:
+            self._gates[dof] = float(2.0 * gammaincinv(dof / 2.0, self.config.gate_probability))  # χ² quantile
+        return self._gates[dof]
+
+    def _nis(self, det: object) -> float:
+        """NIS of ``det`` against the track predicted to its time (EKF linearisation; does not change the track)."""
+        f = self.filter
+        F = self.model.jacobian(f.x, det.t_meas - f.t)
+        x = self.model.propagate(f.x, det.t_meas - f.t)
+        P = F @ f.P @ F.T + self.model.process_noise(det.t_meas - f.t, f.x)
+        h = measurement_model(det, self.layout, self.config.target_height)
+        H = h.jacobian(x)
+        nu = h.residual(np.asarray(det.z, dtype=float), h.h(x))
+        S = H @ P @ H.T + np.asarray(det.R, dtype=float)
+        return float(nu @ np.linalg.solve(S, nu))
+
+    def step(self, t: float, detections: Sequence[object]) -> TargetEstimate | None:
+        """Absorb ``detections`` (sorted by ``t_meas``) and return the estimate at ``t`` (s), or None without a track."""
+        scans: dict[tuple[float, str], list] = {}
+        for d in detections:
+            scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
+        for (t_meas, _), dets in sorted(scans.items(), key=lambda kv: kv[0][0]):
+            if self.filter is not None and t_meas - self.last_update_t > self.config.lost_after_s:
+                self.filter = None
+            if self.filter is None:
+                self._initiate(dets)
+                continue
+            if t_meas < self.filter.t:
+                continue  # out of sequence: older than the track
+            best, best_nis = None, np.inf
+            for d in dets:
+                nis = self._nis(d)
+                gate = self._gate(np.size(d.z))
+                if nis <= gate and nis < best_nis:
+                    best, best_nis = d, nis
+            if best is None:
+                self.gated_out += len(dets)
+                continue
+            self.filter.update(best)
+            self.updates += 1
+            self.last_update_t = t_meas
+        if self.filter is None:
+            return None
+        if t - self.last_update_t > self.config.lost_after_s:
+            self.filter = None
+            return None
+        if t > self.filter.t:
+            self.filter.predict(t)
+        x, P = self.filter.x, self.filter.P
+        idx = self._ix + self._iv
+        return TargetEstimate(t=self.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=P[np.ix_(idx, idx)])

@@ -1,0 +1,147 @@
+"""World-file entries → configured components: sensors, estimators, guidance laws, fleet options, the car fleet.
+
+World files give angles in degrees (``*_deg``) and leave out what should take a component's own default; here the
+degrees become radians and only the given fields reach the component's config dataclass, whose ``__post_init__``
+validates them.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
+from autonomy.guidance.waypoints import WaypointConfig, WaypointGuidance
+from simulator.plugins import load_plugin
+from worlds.schema import BearingSpec, BoxSpec, CameraSpec, FovSpec, RadarSpec, UavSpec, World
+
+__all__ = ["build_sensor", "build_estimator", "build_guidance", "build_idle_guidance", "fleet_options",
+           "build_car_fleet"]
+
+_COMMON = {"id", "type", "fov"}
+
+
+def _given(spec: Any, skip: set[str] = _COMMON) -> dict[str, Any]:
+    """Fields set in the world file (None = use the component default), degrees converted to radians."""
+    out: dict[str, Any] = {}
+    for name, value in spec.model_dump(exclude_none=True).items():
+        if name in skip:
+            continue
+        if name.endswith("_deg"):
+            out[name[:-4]] = math.radians(value)
+        else:
+            out[name] = value
+    return out
+
+
+def _fov(spec: FovSpec | None) -> Any:
+    from autonomy.sensing.fov import FieldOfRegard
+
+    if spec is None:
+        return FieldOfRegard()
+    return FieldOfRegard(frame=spec.frame, azimuth_limits=tuple(math.radians(a) for a in spec.azimuth_limits_deg),
+                         elevation_limits=tuple(math.radians(a) for a in spec.elevation_limits_deg))
+
+
+def build_sensor(spec: Any, name: str, buildings: Any = ()) -> Any:
+    """A sensor model from its world-file entry (``buildings`` are the box sensor's shadow casters)."""
+    if isinstance(spec, RadarSpec):
+        from autonomy.sensing.radar import Radar, RadarConfig
+
+        return Radar(RadarConfig(**_given(spec), fov=_fov(spec.fov)), sensor_id=name)
+    if isinstance(spec, CameraSpec):
+        from autonomy.sensing.camera import Camera, CameraConfig
+
+        return Camera(CameraConfig(**_given(spec)), sensor_id=name)
+    if isinstance(spec, BearingSpec):
+        from autonomy.sensing.bearing import BearingConfig, BearingSensor
+
+        return BearingSensor(BearingConfig(**_given(spec), fov=_fov(spec.fov)), sensor_id=name)
+    if isinstance(spec, BoxSpec):
+        from autonomy.sensing.box_sensor import BoxSensor, BoxSensorConfig
+
+        return BoxSensor(BoxSensorConfig(**_given(spec)), buildings=buildings, sensor_id=name)
+    raise TypeError(f"unknown sensor spec {type(spec).__name__}")
+
+
+def build_estimator(uav: UavSpec, index: int) -> Any:
+    """The UAV's target estimator: the built-in single-target tracker, or a plugin class built with ``params``."""
+    est = uav.autonomy.estimator
+    if est.type == "plugin":
+        cls = load_plugin(est.plugin, f"uavs[{index}].autonomy.estimator.plugin", ("step",))
+        return cls(**est.params)
+    return SingleTargetTracker(TrackerConfig(filter=est.type, model=est.model, **est.params))
+
+
+def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> Any:
+    """The UAV's guidance law from its world-file entry."""
+    g = uav.autonomy.guidance
+    if g.type == "plugin":
+        cls = load_plugin(g.plugin, f"uavs[{index}].autonomy.guidance.plugin", ("command",))
+        return cls(**g.params)
+    if g.type == "hold":
+        return WaypointGuidance(WaypointConfig(waypoints=(tuple(uav.initial.position),), speed=g.speed, **g.params))
+    if g.type == "waypoints":
+        return WaypointGuidance(WaypointConfig(waypoints=tuple(tuple(w) for w in g.waypoints), speed=g.speed,
+                                               **g.params))
+    common = dict(standoff_radius=g.standoff_m, nominal_speed=g.speed, altitude=g.altitude, team_size=team_size)
+    if g.type == "vector_field":
+        from autonomy.guidance.vector_field import VectorFieldConfig, VectorFieldGuidance
+
+        return VectorFieldGuidance(VectorFieldConfig(**common, **g.params), slot=index)
+    if g.type == "nmpc":
+        from autonomy.guidance.nmpc import NmpcStandoffGuidance
+        from autonomy.guidance.nmpc_config import NmpcConfig
+
+        return NmpcStandoffGuidance(NmpcConfig(**common, **g.params), slot=index, buildings=buildings)
+    raise ValueError(f"unknown guidance type {g.type!r}")
+
+
+def build_idle_guidance(uav: UavSpec) -> Any:
+    """What a target-following UAV flies while it has no estimate: hold its start point at the guidance altitude."""
+    g = uav.autonomy.guidance
+    if g.type in ("hold", "waypoints", "plugin"):
+        return None
+    x, y, _ = uav.initial.position
+    return WaypointGuidance(WaypointConfig(waypoints=((x, y, g.altitude),), speed=g.speed))
+
+
+def fleet_options(world: World) -> Any:
+    """Quadrotor fleet options from the environment section (all UAVs share one outer-loop rate)."""
+    from vehicles.quadrotor.fleet import FleetOptions
+    from vehicles.quadrotor.wind import WindConfig
+
+    env = world.environment
+    wind = None
+    if env.wind is not None:
+        turb = env.wind.turbulence
+        sigma = (0.0, 0.0, 0.0) if turb is None else (turb.sigma, turb.sigma, turb.sigma / 2)
+        length = (200.0, 200.0, 50.0) if turb is None else (turb.length_scale,) * 3
+        airspeed = max(1.0, math.hypot(*env.wind.mean_W[:2]))
+        wind = WindConfig(mean_W=tuple(env.wind.mean_W), sigma=sigma, length_scale=length, airspeed=airspeed)
+    rates = {u.outer_loop_hz for u in world.uavs}
+    if len(rates) > 1:
+        raise ValueError(f"all UAVs must share one outer_loop_hz, got {sorted(rates)}")
+    return FleetOptions(wind=wind, downwash=env.downwash, ground_effect=env.ground_effect,
+                        outer_loop_hz=rates.pop() if rates else 48)
+
+
+def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
+    """The ground vehicles, their drivers and routes."""
+    from vehicles.car.driver_config import DriverConfig
+    from vehicles.car.fleet import CarFleet
+    from vehicles.car.params import load_car
+    from vehicles.car.route import Route
+
+    params, drivers, routes = [], [], []
+    for g in world.ground_vehicles:
+        params.append(load_car(g.type))
+        overrides = dict(g.driver)
+        if not g.route.stop_at_junctions:
+            overrides.setdefault("stop_probability", 0.0)
+        drivers.append(DriverConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in overrides.items()}))
+        if g.route.roads is not None:
+            routes.append(Route(roads=tuple(g.route.roads)))
+        else:
+            routes.append(Route(random_walk=True, start_road=g.route.random_walk_from))
+    return CarFleet(client, params, drivers, routes, network, physics_hz, rng)

@@ -19,7 +19,7 @@ from autonomy.guidance.setpoints import Setpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.measurement import Detection
 
-__all__ = ["Agent", "AgentOutput", "TargetEstimator", "GuidanceLaw"]
+__all__ = ["Agent", "AgentOutput", "GuidanceLaw", "TargetEstimator"]
 
 
 @runtime_checkable

@@ -24,7 +24,7 @@ from worlds.build import build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
 
-__all__ = ["Assembly", "Prepared", "prepare", "build_assembly"]
+__all__ = ["Assembly", "Prepared", "build_assembly", "prepare"]
 
 
 @dataclass

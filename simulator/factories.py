@@ -15,8 +15,14 @@ from autonomy.guidance.waypoints import WaypointConfig, WaypointGuidance
 from simulator.plugins import load_plugin
 from worlds.schema import BearingSpec, BoxSpec, CameraSpec, FovSpec, RadarSpec, UavSpec, World
 
-__all__ = ["build_sensor", "build_estimator", "build_guidance", "build_idle_guidance", "fleet_options",
-           "build_car_fleet"]
+__all__ = [
+    "build_car_fleet",
+    "build_estimator",
+    "build_guidance",
+    "build_idle_guidance",
+    "build_sensor",
+    "fleet_options",
+]
 
 _COMMON = {"id", "type", "fov"}
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from simulator.runrecord import RunRecord, load_run
 
-__all__ = ["write_plots", "write_geometry"]
+__all__ = ["write_geometry", "write_plots"]
 
 _COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
 

@@ -17,7 +17,7 @@ import trimesh
 
 from worlds.geometry import Building
 
-__all__ = ["Scene", "SceneConfig", "BUILDING_RGBA", "GROUND_RGBA", "ROAD_RGBA"]
+__all__ = ["BUILDING_RGBA", "GROUND_RGBA", "ROAD_RGBA", "Scene", "SceneConfig"]
 
 BUILDING_RGBA = (0.72, 0.72, 0.75, 1.0)
 GROUND_RGBA = (0.36, 0.45, 0.33, 1.0)
@@ -35,6 +35,29 @@ def _box_mesh(centres: np.ndarray, sizes: np.ndarray, yaws: np.ndarray) -> tuple
     corners = np.stack([c * x - s * y, s * x + c * y, corners[..., 2]], axis=-1) + centres[:, None, :]
     faces = np.asarray(_UNIT_BOX.faces)[None] + 8 * np.arange(len(centres))[:, None, None]
     return corners.reshape(-1, 3), faces.reshape(-1, 3)
+
+
+def _extrude(footprint: np.ndarray, z0: float, z1: float) -> tuple[np.ndarray, np.ndarray]:
+    """Closed triangle mesh of a counter-clockwise footprint extruded from z0 to z1: (vertices (V, 3), faces (F, 3))."""
+    import shapely
+
+    tris = shapely.constrained_delaunay_triangles(shapely.Polygon(footprint))
+    caps = np.array([np.asarray(t.exterior.coords)[:3] for t in shapely.get_parts(tris)])  # (T, 3, 2)
+    for tri in caps:  # make every cap triangle counter-clockwise
+        if (tri[1, 0] - tri[0, 0]) * (tri[2, 1] - tri[0, 1]) - (tri[1, 1] - tri[0, 1]) * (tri[2, 0] - tri[0, 0]) < 0:
+            tri[[1, 2]] = tri[[2, 1]]
+    n_t = len(caps)
+    top = np.concatenate([caps.reshape(-1, 2), np.full((3 * n_t, 1), z1)], axis=1)
+    bottom = np.concatenate([caps[:, ::-1].reshape(-1, 2), np.full((3 * n_t, 1), z0)], axis=1)
+    a, b = footprint, np.roll(footprint, -1, axis=0)
+    k = len(footprint)
+    walls = np.stack([np.c_[a, np.full(k, z0)], np.c_[b, np.full(k, z0)], np.c_[b, np.full(k, z1)],
+                      np.c_[a, np.full(k, z1)]], axis=1).reshape(-1, 3)  # quads a0 b0 b1 a1, outward for CCW
+    verts = np.concatenate([top, bottom, walls])
+    cap_faces = np.arange(6 * n_t).reshape(-1, 3)
+    q = 6 * n_t + 4 * np.arange(k)[:, None]
+    wall_faces = np.concatenate([q + [0, 1, 2], q + [0, 2, 3]])
+    return verts, np.concatenate([cap_faces, wall_faces]).astype(int)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -76,7 +99,7 @@ class Scene:
     road_id: int | None = None
 
     @classmethod
-    def create(cls, config: SceneConfig) -> "Scene":
+    def create(cls, config: SceneConfig) -> Scene:
         client = p.connect(p.DIRECT)
         p.resetSimulation(physicsClientId=client)
         p.setGravity(0.0, 0.0, -config.gravity, physicsClientId=client)
@@ -125,14 +148,10 @@ class Scene:
         return p.createMultiBody(0, col, vis, physicsClientId=c)
 
     def _extruded(self, buildings: Sequence[Building]) -> int:
-        import shapely
-
-        meshes = []
-        for b in buildings:
-            m = trimesh.creation.extrude_polygon(shapely.Polygon(b.footprint), b.height)
-            m.apply_translation([0, 0, b.base_z])
-            meshes.append(m)
-        mesh = trimesh.util.concatenate(meshes)
+        parts = [_extrude(b.footprint, b.base_z, b.top_z) for b in buildings]
+        offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+        mesh = trimesh.Trimesh(vertices=np.concatenate([v for v, _ in parts]),
+                               faces=np.concatenate([f + o for (_, f), o in zip(parts, offsets)]), process=False)
         return self.add_static_mesh(mesh, BUILDING_RGBA, collision=True)
 
     def add_static_mesh(self, mesh: trimesh.Trimesh, rgba: Sequence[float], collision: bool) -> int:

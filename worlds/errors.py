@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["WorldIssue", "WorldError", "format_path"]
+__all__ = ["WorldError", "WorldIssue", "format_path"]
 
 
 def format_path(loc: tuple[str | int, ...]) -> str:

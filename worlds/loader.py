@@ -20,7 +20,7 @@ from worlds.checks import check_world
 from worlds.errors import WorldError, WorldIssue, format_path
 from worlds.schema import World
 
-__all__ = ["LoadedWorld", "load_world", "shipped_worlds", "parse_override", "world_path"]
+__all__ = ["LoadedWorld", "load_world", "parse_override", "shipped_worlds", "world_path"]
 
 _PATH_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 

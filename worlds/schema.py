@@ -12,10 +12,34 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 __all__ = [
-    "World", "SimSection", "EnvironmentSection", "WindSection", "TurbulenceSection", "TerrainSection", "RoadsSection",
-    "StreetSpec", "BuildingSpec", "TownSection", "GroundVehicleSpec", "RouteSpec", "UavSpec", "InitialPose",
-    "SensorSpec", "RadarSpec", "CameraSpec", "BearingSpec", "BoxSpec", "AutonomySpec", "EstimatorSpec", "GuidanceSpec",
-    "CommsSection", "RenderSection", "OsmSection", "OutageSpec", "DecoySpec", "FovSpec",
+    "AutonomySpec",
+    "BearingSpec",
+    "BoxSpec",
+    "BuildingSpec",
+    "CameraSpec",
+    "CommsSection",
+    "DecoySpec",
+    "EnvironmentSection",
+    "EstimatorSpec",
+    "FovSpec",
+    "GroundVehicleSpec",
+    "GuidanceSpec",
+    "InitialPose",
+    "OsmSection",
+    "OutageSpec",
+    "RadarSpec",
+    "RenderSection",
+    "RoadsSection",
+    "RouteSpec",
+    "SensorSpec",
+    "SimSection",
+    "StreetSpec",
+    "TerrainSection",
+    "TownSection",
+    "TurbulenceSection",
+    "UavSpec",
+    "WindSection",
+    "World",
 ]
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -60,7 +84,7 @@ class TerrainSection(Strict):
     size: Vec2 = Field((2000.0, 2000.0), description="extent of the ground plane (x, y), m")
 
     @model_validator(mode="after")
-    def _positive(self) -> "TerrainSection":
+    def _positive(self) -> TerrainSection:
         if min(self.size) <= 0:
             raise ValueError(f"size must be positive, got {list(self.size)}")
         return self
@@ -95,7 +119,7 @@ class RoadsSection(Strict):
     town: TownSection | None = None
 
     @model_validator(mode="after")
-    def _one_source(self) -> "RoadsSection":
+    def _one_source(self) -> RoadsSection:
         sources = [bool(self.streets), self.osm is not None, self.town is not None]
         if sum(sources) > 1:
             raise ValueError("give roads as streets, osm or town: at most one of them")
@@ -112,7 +136,7 @@ class BuildingSpec(Strict):
     yaw_deg: float = 0.0
 
     @model_validator(mode="after")
-    def _positive(self) -> "BuildingSpec":
+    def _positive(self) -> BuildingSpec:
         if min(self.size) <= 0:
             raise ValueError(f"size must be positive in every axis, got {list(self.size)}")
         return self
@@ -124,7 +148,7 @@ class RouteSpec(Strict):
     stop_at_junctions: bool = True
 
     @model_validator(mode="after")
-    def _exactly_one(self) -> "RouteSpec":
+    def _exactly_one(self) -> RouteSpec:
         if (self.roads is None) == (self.random_walk_from is None):
             raise ValueError("give exactly one of 'roads' or 'random_walk_from'")
         return self
@@ -230,7 +254,7 @@ class EstimatorSpec(Strict):
                                    description="TrackerConfig fields, or keyword arguments of a plugin class")
 
     @model_validator(mode="after")
-    def _plugin(self) -> "EstimatorSpec":
+    def _plugin(self) -> EstimatorSpec:
         _check_plugin(self.type, self.plugin)
         return self
 
@@ -246,7 +270,7 @@ class GuidanceSpec(Strict):
                                    description="further fields of the law's config, or keyword arguments of a plugin")
 
     @model_validator(mode="after")
-    def _plugin(self) -> "GuidanceSpec":
+    def _plugin(self) -> GuidanceSpec:
         _check_plugin(self.type, self.plugin)
         if self.type == "waypoints" and not self.waypoints:
             raise ValueError("type 'waypoints' needs a non-empty 'waypoints' list")

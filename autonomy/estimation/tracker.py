@@ -25,7 +25,7 @@ from autonomy.estimation.measurements import measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
 from autonomy.guidance.types import TargetEstimate
 
-__all__ = ["TrackerConfig", "SingleTargetTracker", "make_motion_model"]
+__all__ = ["SingleTargetTracker", "TrackerConfig", "make_motion_model"]
 
 
 @dataclass(frozen=True, kw_only=True)

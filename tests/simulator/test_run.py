@@ -1,6 +1,5 @@
 """Whole runs through the real physics: determinism, the run record, interruption, errors, user plugins."""
 
-import json
 import os
 import signal
 import subprocess
@@ -76,7 +75,6 @@ def test_exception_in_user_code_is_recorded(tmp_path):
         def step(self, t, detections):
             if t > 1.0:
                 raise RuntimeError("estimator exploded")
-            return None
 
     result = run("demo", duration=5.0, out_dir=tmp_path, estimator=Broken)
     assert result.status == "error" and "estimator exploded" in result.error

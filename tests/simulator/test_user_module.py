@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from simulator.api import run
-from tests.simulator.user_modules.centroid import CentroidEstimator, CircleGuidance
+from tests.simulator.user_modules.centroid import CentroidEstimator
 
 
 def test_user_estimator_passed_in_code(tmp_path):

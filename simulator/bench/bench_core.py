@@ -1,0 +1,76 @@
+"""Benchmarks of the simulator core: static scene build time and closed-loop real-time factor of whole worlds."""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from simulator.bench.registry import BenchRecord, benchmark, median_of
+
+__all__: list[str] = []
+
+
+def _scene_build_s(buildings: list, network: object | None) -> float:
+    from simulator.scene import Scene, SceneConfig
+    from worlds.roads.mesh import road_surface_mesh
+
+    t0 = time.perf_counter()
+    scene = Scene.create(SceneConfig())
+    scene.add_buildings(buildings)
+    if network is not None:
+        scene.add_road_surface(road_surface_mesh(network))
+    dt = time.perf_counter() - t0
+    scene.close()
+    return dt
+
+
+@benchmark("scene_build", produces=("scene_build_s_town500", "scene_build_s_helsinki", "scene_step_ms_town500"))
+def bench_scene_build() -> list[BenchRecord]:
+    """PyBullet scene build (buildings + road surface) for a 500-building town and the Helsinki extract."""
+    from simulator.scene import Scene, SceneConfig
+    from worlds.geometry import Building
+
+    rng = np.random.default_rng(0)
+    blds = [Building.cuboid((40.0 * (i % 25), 40.0 * (i // 25)), (20.0, 15.0, float(rng.uniform(8, 40))),
+                            float(rng.uniform(0, np.pi))) for i in range(500)]
+    records = [BenchRecord(name="scene_build_s_town500", value=median_of(lambda: _scene_build_s(blds, None)),
+                           unit="s", target=2.0, better="lower")]
+    scene = Scene.create(SceneConfig())
+    scene.add_buildings(blds)
+    t0 = time.perf_counter()
+    for _ in range(2400):
+        scene.step()
+    records.append(BenchRecord(name="scene_step_ms_town500", value=(time.perf_counter() - t0) / 2400 * 1e3,
+                               unit="ms", better="lower"))
+    scene.close()
+    try:
+        from worlds.build import resolve_map_path
+        from worlds.osm import load_osm
+
+        town = load_osm(resolve_map_path("helsinki.osm.pbf", Path(".")))
+        records.append(BenchRecord(name="scene_build_s_helsinki",
+                                   value=median_of(lambda: _scene_build_s(list(town.buildings), town.network), 3),
+                                   unit="s", target=2.0, better="lower"))
+    except (ImportError, FileNotFoundError):
+        pass
+    return records
+
+
+def _world_rtf(name: str, duration: float, overrides: tuple[str, ...] = ()) -> float:
+    from simulator.api import run
+
+    with tempfile.TemporaryDirectory() as tmp:
+        result = run(name, duration=duration, overrides=overrides, out_dir=tmp)
+        if result.status != "completed":
+            raise RuntimeError(f"{name} did not complete: {result.error}")
+        return float(result.metrics["real_time_factor"])
+
+
+@benchmark("world_rtf", produces=("demo_rtf",))
+def bench_world_rtf() -> list[BenchRecord]:
+    """Closed-loop real-time factor of the demo world (2 quadrotors, 1 car, radars, EKF, vector-field guidance)."""
+    return [BenchRecord(name="demo_rtf", value=median_of(lambda: _world_rtf("demo", 20.0), 3), unit="x",
+                        better="higher")]

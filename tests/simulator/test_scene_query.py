@@ -23,8 +23,11 @@ def add_box(cid: int, center, half, yaw: float = 0.0, rgba=(0.7, 0.7, 0.7, 1.0))
     return p.createMultiBody(0, col, vis, basePosition=list(center), baseOrientation=q, physicsClientId=cid)
 
 
-BUILDINGS = [Building.cuboid((30.0, 0.0), (10.0, 10.0, 20.0)), Building.cuboid((-20.0, 35.0), (16.0, 8.0, 35.0), yaw=0.6),
-             Building.cuboid((10.0, -40.0), (12.0, 20.0, 12.0), yaw=-1.1)]
+BUILDINGS = [
+    Building.cuboid((30.0, 0.0), (10.0, 10.0, 20.0)),
+    Building.cuboid((-20.0, 35.0), (16.0, 8.0, 35.0), yaw=0.6),
+    Building.cuboid((10.0, -40.0), (12.0, 20.0, 12.0), yaw=-1.1),
+]
 
 
 @pytest.fixture
@@ -50,14 +53,20 @@ def test_building_blocks_and_non_occluders_are_looked_through(town):
     car = add_box(cid, [60.0, 30.0, 0.75], [2.0, 0.9, 0.75])
     a = np.array([0.0, 0.0, 12.0])
     seg_from = np.array([a, a, a, a, a, [61.0, 30.0, 1.0]])
-    seg_to = np.array([
-        [50.0, 0.0, 5.0],  # through the building, with the UAV body in front of it: blocked
-        [60.0, 30.0, 0.75],  # ends at the car centre (inside the car): clear
-        [62.0, 30.0, 0.75],  # ends inside the car, beyond its near face: clear
-        [60.0, 30.0, 0.0],  # ends on the ground under the car's middle: the car is looked through, ground not an obstacle
-        [15.0, 0.0, 12.0],  # ends inside the UAV body: clear
-        [90.0, 30.0, 1.0],  # starts inside the car, nothing beyond: clear
-    ])
+    seg_to = np.array(
+        [
+            [50.0, 0.0, 5.0],  # through the building, with the UAV body in front of it: blocked
+            [60.0, 30.0, 0.75],  # ends at the car centre (inside the car): clear
+            [62.0, 30.0, 0.75],  # ends inside the car, beyond its near face: clear
+            [
+                60.0,
+                30.0,
+                0.0,
+            ],  # ends on the ground under the car's middle: the car is looked through, ground not an obstacle
+            [15.0, 0.0, 12.0],  # ends inside the UAV body: clear
+            [90.0, 30.0, 1.0],  # starts inside the car, nothing beyond: clear
+        ]
+    )
     np.testing.assert_array_equal(sq.line_of_sight(seg_from, seg_to), [False, True, True, True, True, True])
     assert uav not in sq.occluder_body_ids and car not in sq.occluder_body_ids
 
@@ -69,8 +78,13 @@ def test_agrees_with_exact_fake_scene_on_random_segments(town):
     a = np.column_stack([rng.uniform(-60, 60, n), rng.uniform(-60, 60, n), rng.uniform(0.5, 50, n)])
     b = np.column_stack([rng.uniform(-60, 60, n), rng.uniform(-60, 60, n), rng.uniform(0.5, 50, n)])
     # segments starting inside a building are out of scope (a Bullet ray does not hit a body from inside)
-    outside = ~np.any([shapely.intersects_xy(shapely.Polygon(bd.footprint), a[:, 0], a[:, 1]) & (a[:, 2] <= bd.top_z)
-                       for bd in BUILDINGS], axis=0)
+    outside = ~np.any(
+        [
+            shapely.intersects_xy(shapely.Polygon(bd.footprint), a[:, 0], a[:, 1]) & (a[:, 2] <= bd.top_z)
+            for bd in BUILDINGS
+        ],
+        axis=0,
+    )
     a, b = a[outside], b[outside]
     fake = FakeScene(BUILDINGS).line_of_sight(a, b)
     real = sq.line_of_sight(a, b)

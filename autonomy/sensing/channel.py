@@ -1,0 +1,342 @@
+"""Radio channel: packet erasures, range, building blockage, latency, outages, and multi-hop routing to a base.
+
+Link model (Rayleigh fast fading, Liu, Fu & Gao 2018): a packet over a link of length ``d`` arrives with
+
+    Pr(d) = exp(-N gamma d**alpha / (C P))
+
+with transmit power ``P`` and noise power ``N`` in mW (from dBm). The defaults (``P`` = 30 dBm, ``N`` = -70 dBm,
+``gamma`` = 10, ``C`` = 1, ``alpha`` = 3, the paper's Table 1) give ``Pr(d) = exp(-(d / 1000 m)**3)``. On top,
+``Pr = 0`` beyond ``max_range``, across a building (``SceneQuery.line_of_sight``) when ``block_by_buildings``, and
+during a scheduled :class:`LinkOutage`.
+
+Routing: the minimum spanning tree over the nodes with edge weights ``-ln Pr`` (the most reliable tree), rooted
+at the base; a node's route is its tree path and its route probability ``beta`` the product of the hop
+probabilities. Erasures are independent per hop; each hop adds ``latency_s``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
+
+from .messages import Envelope, Message
+from .scene import SceneQuery
+
+__all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "minimum_spanning_tree_routes"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class LinkOutage:
+    """A link forced down for ``start_s <= t < end_s`` (both directions).
+
+    Attributes
+    ----------
+    node_a, node_b : str
+        The link's ends.
+    start_s, end_s : float
+        Outage window (s).
+    """
+
+    node_a: str
+    node_b: str
+    start_s: float
+    end_s: float
+
+    def __post_init__(self) -> None:
+        if not (self.end_s > self.start_s):
+            raise ValueError(f"LinkOutage.end_s ({self.end_s}) must be > start_s ({self.start_s})")
+        if self.node_a == self.node_b:
+            raise ValueError(f"LinkOutage needs two different nodes, got {self.node_a!r} twice")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChannelConfig:
+    """Radio parameters.
+
+    Attributes
+    ----------
+    transmit_power_dbm : float
+        Transmit power ``P`` (dBm).
+    noise_power_dbm : float
+        Noise power ``N`` (dBm).
+    gamma : float
+        SNR threshold ``gamma`` of successful decoding (dimensionless, linear).
+    c : float
+        Link constant ``C`` (dimensionless).
+    alpha : float
+        Path-loss exponent.
+    max_range : float | None
+        Hard range limit (m); ``None`` for none.
+    block_by_buildings : bool
+        Whether buildings between two nodes cut their link.
+    latency_s : float
+        Delay per hop (s); must be a whole number of physics ticks.
+    outages : tuple[LinkOutage, ...]
+        Scheduled link outages.
+    """
+
+    transmit_power_dbm: float = 30.0
+    noise_power_dbm: float = -70.0
+    gamma: float = 10.0
+    c: float = 1.0
+    alpha: float = 3.0
+    max_range: float | None = None
+    block_by_buildings: bool = True
+    latency_s: float = 0.0
+    outages: tuple[LinkOutage, ...] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        for name in ("gamma", "c", "alpha"):
+            if not (getattr(self, name) > 0):
+                raise ValueError(f"ChannelConfig.{name} must be > 0, got {getattr(self, name)}")
+        if self.max_range is not None and not (self.max_range > 0):
+            raise ValueError(f"ChannelConfig.max_range must be > 0 m or None, got {self.max_range}")
+        if not (self.latency_s >= 0):
+            raise ValueError(f"ChannelConfig.latency_s must be >= 0 s, got {self.latency_s}")
+        object.__setattr__(self, "outages", tuple(self.outages))
+
+    @property
+    def fading_scale(self) -> float:
+        """``k = N gamma / (C P)`` (m**-alpha), so ``Pr(d) = exp(-k d**alpha)``."""
+        n_mw = 10.0 ** (self.noise_power_dbm / 10.0)
+        p_mw = 10.0 ** (self.transmit_power_dbm / 10.0)
+        return n_mw * self.gamma / (self.c * p_mw)
+
+    def delivery_probability(self, d: np.ndarray | float) -> np.ndarray:
+        """Fading-only packet delivery probability at distance ``d`` (m), range limit applied."""
+        d = np.asarray(d, dtype=float)
+        pr = np.exp(-self.fading_scale * d**self.alpha)
+        if self.max_range is not None:
+            pr = np.where(d <= self.max_range, pr, 0.0)
+        return pr
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChannelStats:
+    """Message counts for the recorder (a snapshot).
+
+    Attributes
+    ----------
+    sent : int
+        Message copies handed to the channel (one per addressee for broadcasts).
+    delivered : int
+        Copies handed to their receiver.
+    lost : int
+        Copies erased (fading, range, blockage, outage, or any hop of a route).
+    in_flight : int
+        Copies that will arrive later.
+    by_link : dict[tuple[str, str], tuple[int, int, int]]
+        (sent, delivered, lost) per (sender, final receiver).
+    """
+
+    sent: int
+    delivered: int
+    lost: int
+    in_flight: int
+    by_link: dict[tuple[str, str], tuple[int, int, int]]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoutingTree:
+    """Routes to a root over a spanning tree.
+
+    Attributes
+    ----------
+    nodes : tuple[str, ...]
+        Node names.
+    root : str
+        The base station.
+    parent : dict[str, str | None]
+        Next hop towards the root (``None`` for the root and for nodes cut off from it).
+    link_probability : np.ndarray
+        (N, N) per-link delivery probabilities the tree was built from.
+    """
+
+    nodes: tuple[str, ...]
+    root: str
+    parent: dict[str, str | None]
+    link_probability: np.ndarray
+
+    def path(self, node: str) -> tuple[str, ...]:
+        """Nodes from ``node`` to the root, both included; empty if ``node`` is cut off."""
+        out = [node]
+        while out[-1] != self.root:
+            nxt = self.parent[out[-1]]
+            if nxt is None:
+                return ()
+            out.append(nxt)
+        return tuple(out)
+
+    def hops(self, node: str) -> int:
+        """Hop count to the root (-1 if cut off)."""
+        return len(self.path(node)) - 1
+
+    def route_probability(self, node: str) -> float:
+        """``beta``: product of the hop probabilities along the path (0 if cut off, 1 for the root)."""
+        path = self.path(node)
+        if not path:
+            return 0.0
+        idx = [self.nodes.index(n) for n in path]
+        return float(np.prod([self.link_probability[i, j] for i, j in itertools.pairwise(idx)]))
+
+
+def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
+    """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
+
+    A link with ``Pr = 0`` is absent; nodes in another component than the root get no route.
+    """
+    nodes = tuple(nodes)
+    P = np.asarray(link_probability, dtype=float)
+    if P.shape != (len(nodes), len(nodes)):
+        raise ValueError(f"link_probability must be ({len(nodes)}, {len(nodes)}), got {P.shape}")
+    if root not in nodes:
+        raise ValueError(f"root {root!r} is not among the nodes {nodes}")
+    with np.errstate(divide="ignore"):
+        w = np.where(P > 0, -np.log(np.clip(P, 1e-300, 1.0)) + 1e-12, 0.0)  # csgraph treats 0 as no edge
+    np.fill_diagonal(w, 0.0)
+    w = np.maximum(w, w.T)
+    mst = minimum_spanning_tree(csr_matrix(w))
+    sym = mst + mst.T
+    r = nodes.index(root)
+    order, pred = breadth_first_order(sym, r, directed=False, return_predecessors=True)
+    parent: dict[str, str | None] = {n: None for n in nodes}
+    for k in order:
+        if k != r and pred[k] >= 0:
+            parent[nodes[k]] = nodes[pred[k]]
+    return RoutingTree(nodes=nodes, root=root, parent=parent, link_probability=P)
+
+
+class Channel:
+    """Lossy radio shared by a team (module docstring).
+
+    Parameters
+    ----------
+    config : ChannelConfig
+        Radio parameters.
+    tick_hz : float
+        Physics rate; latencies and outages are stored in ticks.
+    rng : np.random.Generator
+        Source of the erasures.
+    scene : SceneQuery | None
+        Used for building blockage (required when ``config.block_by_buildings``).
+    """
+
+    def __init__(
+        self, config: ChannelConfig, tick_hz: float, rng: np.random.Generator, scene: SceneQuery | None = None
+    ):
+        if not (tick_hz > 0):
+            raise ValueError(f"tick_hz must be > 0, got {tick_hz}")
+        if config.block_by_buildings and scene is None:
+            raise ValueError("ChannelConfig.block_by_buildings needs a scene")
+        self.config = config
+        self.tick_hz = float(tick_hz)
+        self.rng = rng
+        self.scene = scene
+        lat = config.latency_s * tick_hz
+        if abs(lat - round(lat)) > 1e-6:
+            raise ValueError(
+                f"ChannelConfig.latency_s = {config.latency_s} s is not a whole number of {tick_hz} Hz ticks"
+            )
+        self.latency_ticks = round(lat)
+        self._outages = [
+            (
+                frozenset((o.node_a, o.node_b)),
+                int(np.ceil(o.start_s * tick_hz - 1e-9)),
+                int(np.ceil(o.end_s * tick_hz - 1e-9)),
+            )
+            for o in config.outages
+        ]
+        self._queue: list[Envelope] = []
+        self._counts: dict[tuple[str, str], list[int]] = {}
+
+    def link_down(self, a: str, b: str, tick: int) -> bool:
+        """Whether a scheduled outage holds link ``a``-``b`` down at ``tick``."""
+        pair = frozenset((a, b))
+        return any(pair == link and start <= tick < end for link, start, end in self._outages)
+
+    def link_matrix(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
+        """(N, N) symmetric delivery probabilities between ``nodes`` at ``tick`` (diagonal 1)."""
+        nodes = tuple(nodes)
+        pts = np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
+        d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
+        P = self.config.delivery_probability(d)
+        iu, ju = np.triu_indices(len(nodes), k=1)
+        if self.config.block_by_buildings and iu.size:
+            clear = np.asarray(self.scene.line_of_sight(pts[iu], pts[ju]), dtype=bool)
+            P[iu[~clear], ju[~clear]] = 0.0
+            P[ju[~clear], iu[~clear]] = 0.0
+        for i, j in zip(iu, ju, strict=True):
+            if self.link_down(nodes[i], nodes[j], tick):
+                P[i, j] = P[j, i] = 0.0
+        np.fill_diagonal(P, 1.0)
+        return P
+
+    def routing_tree(
+        self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], root: str, tick: int
+    ) -> RoutingTree:
+        """Minimum spanning tree routes to ``root`` at ``tick``."""
+        return minimum_spanning_tree_routes(nodes, self.link_matrix(nodes, positions, tick), root)
+
+    def _count(self, sender: str, receiver: str, k: int) -> None:
+        self._counts.setdefault((sender, receiver), [0, 0, 0])[k] += 1
+
+    def _transmit(self, msg: Message, path: tuple[str, ...], hop_probs: Sequence[float], tick: int) -> bool:
+        receiver = path[-1]
+        self._count(msg.sender, receiver, 0)
+        ok = bool(np.all(self.rng.uniform(size=len(hop_probs)) < np.asarray(hop_probs)))
+        if not ok:
+            self._count(msg.sender, receiver, 2)
+            return False
+        t_tick = tick + self.latency_ticks * (len(path) - 1)
+        self._queue.append(
+            Envelope(message=msg, receiver=receiver, tick_arrival=t_tick, t_arrival=t_tick / self.tick_hz, path=path)
+        )
+        return True
+
+    def send(self, msg: Message, positions: Mapping[str, np.ndarray], tick: int) -> dict[str, bool]:
+        """Send ``msg`` over direct links: to ``msg.receiver``, or to every other node of ``positions`` if None.
+
+        Returns whether each addressee's copy survived (it arrives ``latency_s`` later).
+        """
+        targets = [msg.receiver] if msg.receiver is not None else [n for n in positions if n != msg.sender]
+        nodes = (msg.sender, *targets)
+        P = self.link_matrix(nodes, positions, tick)
+        return {r: self._transmit(msg, (msg.sender, r), [P[0, k + 1]], tick) for k, r in enumerate(targets)}
+
+    def send_routed(self, msg: Message, tree: RoutingTree, tick: int) -> bool:
+        """Send ``msg`` from its sender to the tree's root along the tree path (erasure per hop)."""
+        path = tree.path(msg.sender)
+        if not path:
+            self._count(msg.sender, tree.root, 0)
+            self._count(msg.sender, tree.root, 2)
+            return False
+        idx = [tree.nodes.index(n) for n in path]
+        probs = [tree.link_probability[i, j] for i, j in itertools.pairwise(idx)]
+        return self._transmit(msg, path, probs, tick)
+
+    def receive(self, node: str, tick: int) -> list[Envelope]:
+        """Messages for ``node`` that have arrived by ``tick``, oldest first; they leave the channel."""
+        mine = [e for e in self._queue if e.receiver == node and e.tick_arrival <= tick]
+        if mine:
+            self._queue = [e for e in self._queue if not (e.receiver == node and e.tick_arrival <= tick)]
+            for e in mine:
+                self._count(e.message.sender, node, 1)
+        return sorted(mine, key=lambda e: e.tick_arrival)
+
+    @property
+    def stats(self) -> ChannelStats:
+        sent = sum(c[0] for c in self._counts.values())
+        delivered = sum(c[1] for c in self._counts.values())
+        lost = sum(c[2] for c in self._counts.values())
+        return ChannelStats(
+            sent=sent,
+            delivered=delivered,
+            lost=lost,
+            in_flight=sent - delivered - lost,
+            by_link={k: (c[0], c[1], c[2]) for k, c in self._counts.items()},
+        )

@@ -1,0 +1,135 @@
+"""Measurement types shared by every sensor, and the sensor base class.
+
+A sensor's :meth:`Sensor.measure` returns a :class:`SensorOutput`: the :class:`Detection` list an estimator may
+see, and separately the truth association (target id per detection, ``-1`` for clutter) that only the recorder
+may read.
+
+Measurement layouts (``d = p_target - p_sensor`` in ENU):
+
+- ``"radar"``: ``z = [r, az, el]`` or ``[r, az, el, r_dot]`` with ``r = |d|``, ``az = atan2(d_y, d_x)``,
+  ``el = atan2(d_z, hypot(d_x, d_y))``, ``r_dot = d . (v_target - v_sensor) / r``;
+- ``"bearing"`` and ``"camera"``: ``z = [az]`` or ``[az, el]`` (world frame);
+- ``"box"``: ``z = [x, y]`` with the bounded error ``|z - p_xy| <= bound`` per component.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from .scene import SceneQuery, SensorPose, TargetTruth
+
+__all__ = ["CLUTTER_ID", "Detection", "MeasurementKind", "Sensor", "SensorOutput", "azimuth_elevation", "wrap_angle"]
+
+MeasurementKind = Literal["radar", "bearing", "camera", "box"]
+CLUTTER_ID = -1
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
+    """Wrap angles to [-pi, pi) (rad)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def azimuth_elevation(d_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Azimuth ``atan2(d_y, d_x)`` and elevation ``atan2(d_z, hypot(d_x, d_y))`` (rad) of vectors (N, 3)."""
+    d = np.atleast_2d(d_W)
+    return np.arctan2(d[:, 1], d[:, 0]), np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1]))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Detection:
+    """One measurement.
+
+    Attributes
+    ----------
+    z : np.ndarray
+        (m,) measurement vector in the layout of ``kind`` (module docstring): m, rad, m/s.
+    R : np.ndarray
+        (m, m) noise covariance in the units of ``z`` squared (for ``"box"``: the covariance of the uniform error,
+        ``bound**2 / 3``).
+    t_meas : float
+        When the measurement was taken (s).
+    t_arrival : float
+        When it reaches the consumer (s), ``t_meas + latency``.
+    sensor_id : str
+        Which sensor produced it.
+    p_sensor_W : np.ndarray
+        (3,) sensor position at ``t_meas`` (m).
+    kind : str
+        ``"radar"``, ``"bearing"``, ``"camera"`` or ``"box"``.
+    pixel_box : np.ndarray | None
+        Camera only: (4,) ``[u_min, v_min, u_max, v_max]`` of the detected blob (px, continuous coordinates).
+    bound : np.ndarray | None
+        Box sensor only: (m,) half-widths of the bounded error, so the truth lies in ``[z - bound, z + bound]`` (m).
+    """
+
+    z: np.ndarray
+    R: np.ndarray
+    t_meas: float
+    t_arrival: float
+    sensor_id: str
+    p_sensor_W: np.ndarray
+    kind: MeasurementKind
+    pixel_box: np.ndarray | None = None
+    bound: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        z = np.array(self.z, dtype=float).reshape(-1)
+        R = np.array(self.R, dtype=float)
+        if R.shape != (z.size, z.size):
+            raise ValueError(f"Detection.R must be ({z.size}, {z.size}), got {R.shape}")
+        if self.t_arrival < self.t_meas:
+            raise ValueError(f"Detection.t_arrival ({self.t_arrival}) must be >= t_meas ({self.t_meas})")
+        if self.kind not in ("radar", "bearing", "camera", "box"):
+            raise ValueError(f"Detection.kind must be radar|bearing|camera|box, got {self.kind!r}")
+        for arr in (z, R):
+            arr.setflags(write=False)
+        object.__setattr__(self, "z", z)
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "p_sensor_W", np.array(self.p_sensor_W, dtype=float).reshape(3))
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorOutput:
+    """What one scan produced.
+
+    Attributes
+    ----------
+    detections : tuple[Detection, ...]
+        Measurements for the estimators (in random order: the order carries no truth).
+    truth_ids : np.ndarray
+        (len(detections),) target id behind each detection, ``-1`` for a false alarm; for the recorder only.
+    extras : dict[str, Any]
+        Sensor-specific by-products that are not truth (the box sensor's observed region, a camera frame).
+    """
+
+    detections: tuple[Detection, ...] = ()
+    truth_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    extras: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        ids = np.array(self.truth_ids, dtype=int).reshape(-1)
+        if ids.size != len(self.detections):
+            raise ValueError(f"SensorOutput.truth_ids has {ids.size} entries for {len(self.detections)} detections")
+        object.__setattr__(self, "truth_ids", ids)
+        object.__setattr__(self, "detections", tuple(self.detections))
+
+
+class Sensor(ABC):
+    """A sensor model: one main method, :meth:`measure`.
+
+    Subclasses expose ``sensor_id`` (str), ``rate_hz`` (scans per second) and ``latency_s`` (s).
+    """
+
+    sensor_id: str
+    rate_hz: float
+    latency_s: float
+
+    @abstractmethod
+    def measure(
+        self, tick_time_s: float, pose: SensorPose, targets: TargetTruth, scene: SceneQuery, rng: np.random.Generator
+    ) -> SensorOutput:
+        """Scan at ``tick_time_s`` (s) from ``pose``; ``rng`` supplies all randomness."""

@@ -1,0 +1,140 @@
+"""Radio channel: Rayleigh erasure law, blockage, range, outages, latency, MST routing, message accounting."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from autonomy.sensing.channel import Channel, ChannelConfig, LinkOutage, minimum_spanning_tree_routes
+from autonomy.sensing.fake_scene import FakeScene
+from autonomy.sensing.messages import EstimateMessage, InformationMessage, Message
+from worlds.geometry import Building
+
+TICK_HZ = 240.0
+
+
+def msg(sender: str, receiver: str | None, t: float = 0.0) -> Message:
+    return Message(sender=sender, receiver=receiver, t_sent=t)
+
+
+def test_table1_constants_give_cubic_kilometre_law():
+    cfg = ChannelConfig()
+    assert cfg.fading_scale == pytest.approx(1e-9, rel=1e-12)
+    d = np.array([216.0, 472.0, 885.0, 1000.0, 1320.0])
+    np.testing.assert_allclose(cfg.delivery_probability(d), np.exp(-((d / 1000.0) ** 3)), rtol=1e-12)
+    np.testing.assert_allclose(cfg.delivery_probability(d), [0.99, 0.90, 0.50, 0.368, 0.10], atol=0.005)
+
+
+@pytest.mark.parametrize("distance", [300.0, 700.0, 1000.0, 1300.0])
+def test_empirical_delivery_rate_in_binomial_band(distance):
+    ch = Channel(ChannelConfig(block_by_buildings=False), TICK_HZ, np.random.default_rng(int(distance)))
+    pos = {"a": np.array([0.0, 0.0, 100.0]), "b": np.array([distance, 0.0, 100.0])}
+    n = 2000
+    ok = sum(ch.send(msg("a", "b"), pos, tick)["b"] for tick in range(n))
+    pr = float(np.exp(-((distance / 1000.0) ** 3)))
+    lo, hi = stats.binom.interval(0.99, n, pr)
+    assert lo <= ok <= hi
+    s = ch.stats
+    assert (s.sent, s.lost, s.in_flight, s.delivered) == (n, n - ok, ok, 0)
+    got = ch.receive("b", n)
+    assert len(got) == ok and ch.stats.delivered == ok and ch.stats.in_flight == 0
+    assert ch.stats.by_link[("a", "b")] == (n, ok, n - ok)
+
+
+def test_building_between_uavs_cuts_link():
+    scene = FakeScene([Building.cuboid((100.0, 0.0), (20.0, 20.0, 80.0))])
+    ch = Channel(ChannelConfig(), TICK_HZ, np.random.default_rng(0), scene=scene)
+    pos = {"a": np.array([0.0, 0.0, 50.0]), "b": np.array([200.0, 0.0, 50.0]), "c": np.array([100.0, 100.0, 50.0])}
+    P = ch.link_matrix(("a", "b", "c"), pos, 0)
+    assert P[0, 1] == 0.0 and P[1, 0] == 0.0
+    assert P[0, 2] == pytest.approx(np.exp(-((np.hypot(100, 100) / 1000) ** 3)))
+    assert not any(ch.send(msg("a", "b"), pos, t)["b"] for t in range(200))
+    above = dict(pos, b=np.array([200.0, 0.0, 120.0]), a=np.array([0.0, 0.0, 120.0]))  # both fly over the roof
+    assert ch.link_matrix(("a", "b"), above, 0)[0, 1] > 0.99
+
+
+def test_hard_range_and_scheduled_outage():
+    cfg = ChannelConfig(
+        block_by_buildings=False,
+        max_range=500.0,
+        outages=(LinkOutage(node_a="u1", node_b="u3", start_s=150 * 0.5, end_s=200 * 0.5),),
+    )
+    ch = Channel(cfg, 2.0, np.random.default_rng(0))  # 2 Hz ticks: tick k is the paper's step k
+    pos = {"u1": np.array([0.0, 0.0, 100.0]), "u3": np.array([10.0, 0.0, 110.0]), "u4": np.array([600.0, 0, 100])}
+    nodes = ("u1", "u3", "u4")
+    assert ch.link_matrix(nodes, pos, 149)[0, 1] > 0.99
+    assert ch.link_matrix(nodes, pos, 150)[0, 1] == 0.0 and ch.link_matrix(nodes, pos, 150)[1, 0] == 0.0
+    assert ch.link_matrix(nodes, pos, 199)[0, 1] == 0.0
+    assert ch.link_matrix(nodes, pos, 200)[0, 1] > 0.99
+    assert ch.link_matrix(nodes, pos, 0)[0, 2] == 0.0  # 600 m > max_range
+
+
+def test_latency_in_ticks_and_broadcast():
+    ch = Channel(ChannelConfig(block_by_buildings=False, latency_s=0.05), TICK_HZ, np.random.default_rng(0))
+    assert ch.latency_ticks == 12
+    pos = {n: np.array([10.0 * k, 0.0, 50.0]) for k, n in enumerate(("a", "b", "c"))}
+    m = EstimateMessage(sender="a", receiver=None, t_sent=1.0, target_id=0, x=np.zeros(6), P=np.eye(6), t_estimate=1.0)
+    sent = ch.send(m, pos, 240)
+    assert sent == {"b": True, "c": True}
+    assert ch.receive("b", 251) == []
+    (env,) = ch.receive("b", 252)
+    assert (
+        env.message is m and env.tick_arrival == 252 and env.t_arrival == pytest.approx(1.05) and env.path == ("a", "b")
+    )
+    assert len(ch.receive("c", 1000)) == 1 and ch.stats.delivered == 2
+    with pytest.raises(ValueError, match="latency_s"):
+        Channel(ChannelConfig(block_by_buildings=False, latency_s=0.001), TICK_HZ, np.random.default_rng(0))
+
+
+def test_minimum_spanning_tree_hand_example():
+    # B at the origin; A1 400 m east; A2 800 m east; A3 600 m north of A1.
+    # -ln Pr = (d/1 km)^3: B-A1 0.064, A1-A2 0.064, A1-A3 0.216, B-A3 (721 m) 0.375, A2-A3 (721 m) 0.375, B-A2 0.512
+    pos = {"B": [0.0, 0, 0], "A1": [400.0, 0, 0], "A2": [800.0, 0, 0], "A3": [400.0, 600.0, 0]}
+    ch = Channel(ChannelConfig(block_by_buildings=False), 1.0, np.random.default_rng(0))
+    tree = ch.routing_tree(tuple(pos), {k: np.array(v) for k, v in pos.items()}, "B", 0)
+    assert tree.parent == {"B": None, "A1": "B", "A2": "A1", "A3": "A1"}
+    assert tree.path("A3") == ("A3", "A1", "B") and tree.hops("A2") == 2 and tree.hops("B") == 0
+    assert tree.route_probability("A1") == pytest.approx(np.exp(-0.064))
+    assert tree.route_probability("A2") == pytest.approx(np.exp(-0.128))
+    assert tree.route_probability("A3") == pytest.approx(np.exp(-0.064 - 0.216))
+
+
+def test_routed_delivery_rate_is_product_of_hops_and_cut_off_node_loses():
+    P = np.array([[1.0, 0.9, 0.0, 0.0], [0.9, 1.0, 0.6, 0.0], [0.0, 0.6, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    tree = minimum_spanning_tree_routes(("B", "A1", "A2", "A3"), P, "B")
+    assert tree.path("A3") == () and tree.route_probability("A3") == 0.0
+    ch = Channel(ChannelConfig(block_by_buildings=False, latency_s=1.0), 1.0, np.random.default_rng(3))
+    n = 3000
+    ok = sum(
+        ch.send_routed(
+            InformationMessage(
+                sender="A2",
+                receiver="B",
+                t_sent=0.0,
+                target_id=0,
+                info_vector=np.zeros(4),
+                info_matrix=np.eye(4),
+                t_info=0.0,
+            ),
+            tree,
+            0,
+        )
+        for _ in range(n)
+    )
+    lo, hi = stats.binom.interval(0.99, n, 0.54)
+    assert lo <= ok <= hi
+    assert not ch.send_routed(msg("A3", "B"), tree, 0)
+    arrived = ch.receive("B", 2)
+    assert len(arrived) == ok and all(e.path == ("A2", "A1", "B") and e.tick_arrival == 2 for e in arrived)
+    s = ch.stats
+    assert s.sent == n + 1 and s.delivered == ok and s.lost == n + 1 - ok and s.in_flight == 0
+
+
+def test_config_validation_names_field():
+    with pytest.raises(ValueError, match="alpha"):
+        ChannelConfig(alpha=0.0)
+    with pytest.raises(ValueError, match="end_s"):
+        LinkOutage(node_a="a", node_b="b", start_s=2.0, end_s=1.0)
+    with pytest.raises(ValueError, match="scene"):
+        Channel(ChannelConfig(), 240.0, np.random.default_rng(0))

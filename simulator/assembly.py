@@ -11,6 +11,7 @@ import pybullet as p
 from autonomy.agent import Agent
 from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TeammateState
+from autonomy.sensing.camera import CAR_RGBA
 from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
@@ -74,7 +75,7 @@ class Assembly:
             return TargetTruth.empty()
         st = self.cars.state
         return TargetTruth(ids=np.arange(len(self.car_ids)), p_W=st.p_W, v_W=st.v_W, kind=self.car_kinds,
-                           yaw=np.asarray(st.yaw))
+                           yaw=np.asarray(st.yaw), seg_ids=np.asarray(self.cars.body_ids))
 
     def own_state(self, i: int, t: float) -> OwnState:
         st = self.quads.state
@@ -103,7 +104,7 @@ class Assembly:
             truth = self.target_truth()
             st = self.quads.state
             for slot in due:
-                pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav])
+                pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav], v_W=st.v_W[slot.uav])
                 out = slot.sensor.measure(t, pose, truth, self.scene_query, slot.rng)
                 self._record_detections(tick, t, slot, out)
                 for a in self.agents:
@@ -305,6 +306,8 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
         cars = build_car_fleet(world, geometry.network, scene.client, clock.physics_hz,
                                seeds.generator("vehicles/cars"))
         car_kinds = tuple("decoy" if g.role == "decoy" else "car" for g in world.ground_vehicles)
+        for body in cars.body_ids:  # paint the bodies in the colour the camera detector looks for
+            p.changeVisualShape(int(body), -1, rgbaColor=CAR_RGBA, physicsClientId=scene.client)
 
     car_ids = [g.id for g in world.ground_vehicles]
     target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]

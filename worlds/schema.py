@@ -193,7 +193,7 @@ class RadarSpec(SensorBase):
     sigma_range_rate: PositiveFloat | None = Field(None, description="m/s; omit for no range-rate channel")
     fov: FovSpec | None = None
     max_range: PositiveFloat | None = Field(None, description="m")
-    pd_ref: float | None = Field(None, gt=0, le=1, description="detection probability at range_ref")
+    pd_ref: float | None = Field(None, gt=0, lt=1, description="detection probability at range_ref (Swerling I: < 1)")
     range_ref: PositiveFloat | None = Field(None, description="m")
     pfa: float | None = Field(None, gt=0, lt=1)
     min_detectable_velocity: NonNegFloat | None = Field(None, description="GMTI Doppler notch, m/s")

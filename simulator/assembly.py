@@ -13,6 +13,7 @@ from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TeammateState
 from autonomy.sensing.camera import CAR_RGBA
 from autonomy.sensing.measurement import Sensor
+from autonomy.sensing.messages import StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
 from simulator.factories import build_estimator, build_guidance, build_idle_guidance, build_sensor
@@ -66,6 +67,9 @@ class Assembly:
     latest_estimates: dict[int, Any] = field(default_factory=dict)
     latest_setpoints: dict[int, Any] = field(default_factory=dict)
     world_spec: Any = None
+    channel: Any = None
+    _outage_ticks: list = field(default_factory=list)
+    _heard: dict = field(default_factory=dict)
     event_counts_by_uav: dict = field(default_factory=dict)
     _contacts: set = field(default_factory=set)
 
@@ -81,14 +85,35 @@ class Assembly:
         st = self.quads.state
         return OwnState(t=t, p_W=st.p_W[i], v_W=st.v_W[i], yaw=_yaw(st.q_WB[i]))
 
-    def teammates(self, i: int, t: float) -> list[TeammateState]:
+    def teammates(self, i: int, t: float, tick: int) -> list[TeammateState]:
+        """What UAV ``i`` knows of its team: the truth with perfect comms, else the last state each one got through."""
+        if self.channel is None:
+            st = self.quads.state
+            return [TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=_yaw(st.q_WB[j]))
+                    for j in range(len(self.uav_ids)) if j != i]
+        known = self._heard.setdefault(i, {})
+        for env in self.channel.receive(self.uav_ids[i], tick):
+            msg = env.message
+            if isinstance(msg, StateMessage):
+                j = self.uav_ids.index(msg.sender)
+                known[j] = TeammateState(id=j, t=msg.t_sent, p_W=msg.p_W, v_W=msg.v_W, yaw=msg.yaw,
+                                         plan_p_W=msg.plan_p_W, plan_dt=msg.plan_dt)
+        return [known[j] for j in sorted(known)]
+
+    def _broadcast_state(self, i: int, t: float, tick: int) -> None:
         st = self.quads.state
-        out = []
-        for j in range(len(self.uav_ids)):
-            if j == i:
-                continue
-            out.append(TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=_yaw(st.q_WB[j])))
-        return out
+        plan = getattr(self.agents[i].agent.guidance, "planned_path", lambda: None)()
+        msg = StateMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, p_W=st.p_W[i].copy(),
+                           v_W=st.v_W[i].copy(), yaw=_yaw(st.q_WB[i]), plan_p_W=plan,
+                           plan_dt=float(getattr(getattr(self.agents[i].agent.guidance, "config", None), "dt", 1.0)))
+        self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
+
+    def _outage_events(self, tick: int, t: float) -> None:
+        for a, b, start, end in self._outage_ticks:
+            if tick == max(start, 1):
+                self._event(tick, t, {"type": "link_outage_start", "link": [a, b]})
+            elif tick == end:
+                self._event(tick, t, {"type": "link_outage_end", "link": [a, b]})
 
     # -- the tick ------------------------------------------------------------------------------------------------
     def step(self, tick: int) -> None:
@@ -113,11 +138,15 @@ class Assembly:
         for a in self.agents:                  # 5. agents
             if tick % a.divisor:
                 continue
-            result = a.agent.step(t, self.own_state(a.uav, t), self.teammates(a.uav, t))
+            if self.channel is not None:
+                self._broadcast_state(a.uav, t, tick)
+            result = a.agent.step(t, self.own_state(a.uav, t), self.teammates(a.uav, t, tick))
             self.quads.set_command(a.uav, _to_command(result.setpoint))
             self.latest_estimates[a.uav] = result.estimate
             self.latest_setpoints[a.uav] = result.setpoint
             self._record_agent(tick, t, a.uav, result)
+        if self._outage_ticks:
+            self._outage_events(tick, t)
         for f in fleets:                       # 6. record
             for ev in f.pop_events():
                 self._event(tick, t, dict(ev))
@@ -283,7 +312,7 @@ def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Any) -> Any:
 
 def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> Assembly:
     """Start PyBullet and build the scene and the fleets of a prepared world."""
-    from simulator.factories import build_car_fleet, fleet_options
+    from simulator.factories import build_car_fleet, build_channel, fleet_options
     from vehicles.quadrotor.airframes import load_airframe
     from vehicles.quadrotor.fleet import QuadrotorFleet
 
@@ -311,10 +340,13 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
 
     car_ids = [g.id for g in world.ground_vehicles]
     target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]
+    query = PybulletSceneQuery(scene.client, scene.occluders)
+    outage_ticks = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     return Assembly(clock=clock, scene=scene, recorder=recorder, buildings=geometry.buildings,
                     network=geometry.network, quads=quads, cars=cars, uav_ids=[u.id for u in world.uavs],
                     car_ids=car_ids, car_kinds=car_kinds,
                     target_index=car_ids.index(target_ids[0]) if target_ids else None,
-                    scene_query=PybulletSceneQuery(scene.client, scene.occluders),
-                    sensors=prep.sensors, agents=prep.agents, world_spec=world,
+                    scene_query=query, sensors=prep.sensors, agents=prep.agents, world_spec=world,
+                    channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
+                    _outage_ticks=outage_ticks,
                     record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))

@@ -112,6 +112,19 @@ def build_idle_guidance(uav: UavSpec) -> Any:
     return WaypointGuidance(WaypointConfig(waypoints=((x, y, g.altitude),), speed=g.speed))
 
 
+def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:
+    """The radio channel of the ``comms`` section, or None for perfect communication."""
+    comms = world.comms
+    if comms.model == "perfect":
+        return None
+    from autonomy.sensing.channel import Channel, ChannelConfig, LinkOutage
+
+    given = comms.model_dump(exclude_none=True, exclude={"model", "base_station", "outages"})
+    outages = tuple(LinkOutage(node_a=o.link[0], node_b=o.link[1], start_s=o.start_s, end_s=o.end_s)
+                    for o in comms.outages)
+    return Channel(ChannelConfig(**given, outages=outages), physics_hz, rng, scene)
+
+
 def fleet_options(world: World) -> Any:
     """Quadrotor fleet options from the environment section (all UAVs share one outer-loop rate)."""
     from vehicles.quadrotor.fleet import FleetOptions

@@ -118,6 +118,10 @@ class MetricsTracker:
         if self.phase_err:
             out["phase_error_mean_deg"] = float(np.mean(self.phase_err))
         out["uavs"] = uavs
+        if asm.channel is not None:
+            cs = asm.channel.stats
+            out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,
+                            "delivery_ratio": cs.delivered / cs.sent if cs.sent else None}
         if asm.target_index is not None and self.errors:
             tid = asm.car_ids[asm.target_index]
             out["targets"] = {tid: {asm.uav_ids[i]: e.summary() for i, e in sorted(self.errors.items())}}

@@ -62,7 +62,11 @@ def check_world(world: World) -> list[WorldIssue]:
         if not has_roads:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
                                      "a road network in 'roads' for the vehicle to drive on"))
+    uav_ids = {u.id for u in world.uavs} | {"base"}
     for i, o in enumerate(world.comms.outages):
         if o.end_s <= o.start_s:
             issues.append(WorldIssue(f"comms.outages[{i}].end_s", o.end_s, f"a time after start_s={o.start_s}"))
+        for k, node in enumerate(o.link):
+            if node not in uav_ids:
+                issues.append(WorldIssue(f"comms.outages[{i}].link[{k}]", node, f"a UAV id or 'base' ({sorted(uav_ids)})"))
     return issues

@@ -299,11 +299,21 @@ class OutageSpec(Strict):
 
 
 class CommsSection(Strict):
+    """Radio between UAVs (``autonomy.sensing.channel.ChannelConfig``): ``perfect`` = every message arrives at once.
+
+    ``rayleigh``: Pr(d) = exp(−N·gamma·d^alpha / (c·P)); the defaults (P = 30 dBm, N = −70 dBm, gamma = 10, c = 1,
+    alpha = 3) give exp(−(d / 1000 m)^3), paper 001's Table 1.
+    """
+
     model: Literal["perfect", "rayleigh"] = "perfect"
-    reference_distance: PositiveFloat = Field(1000.0, description="d0 in Pr(d) = exp(-(d/d0)^3), m")
-    max_range: PositiveFloat | None = None
-    line_of_sight: bool = False
-    latency_s: NonNegFloat = 0.0
+    transmit_power_dbm: float | None = None
+    noise_power_dbm: float | None = None
+    gamma: PositiveFloat | None = None
+    c: PositiveFloat | None = None
+    alpha: PositiveFloat | None = None
+    max_range: PositiveFloat | None = Field(None, description="hard range limit, m")
+    block_by_buildings: bool | None = Field(None, description="no link through a building (line of sight)")
+    latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
     base_station: Vec3 | None = None
     outages: list[OutageSpec] = Field(default_factory=list)
 

@@ -99,6 +99,29 @@ class PlanMessage(Message):
 
 
 @dataclass(frozen=True, kw_only=True)
+class StateMessage(Message):
+    """A UAV's own state, broadcast to its team (what teammates see of each other).
+
+    Attributes
+    ----------
+    p_W, v_W : np.ndarray
+        (3,) position (m) and velocity (m/s), world frame.
+    yaw : float
+        Yaw (rad).
+    plan_p_W : np.ndarray | None
+        (K, 2) or (K, 3) planned positions at ``t_sent + plan_dt·(k+1)`` (m), if the guidance law plans.
+    plan_dt : float
+        Step of the plan (s).
+    """
+
+    p_W: np.ndarray
+    v_W: np.ndarray
+    yaw: float
+    plan_p_W: np.ndarray | None = None
+    plan_dt: float = 1.0
+
+
+@dataclass(frozen=True, kw_only=True)
 class Envelope:
     """A delivered message.
 

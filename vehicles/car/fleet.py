@@ -1,0 +1,201 @@
+"""A fleet of physics cars driven along roads: the run loop's view of all ground vehicles.
+
+Per tick the run loop calls ``apply_actuation()``, ``p.stepSimulation()``, ``after_step(tick)``. Actuation turns each
+driver's last :class:`~vehicles.car.driver_config.DriveCommand` into motor targets at the physics rate: the speed
+reference integrates the commanded acceleration, v_ref <- clip(v_ref + a / f_phys, 0, v_max), re-anchored to within
+``_REF_BAND`` of the measured speed at each driver update (so wheel slip or a blocked car cannot wind it up), and the
+steering reference follows the command at most ``max_steer_rate``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vehicles.car.body import CarBody
+from vehicles.car.driver import Driver
+from vehicles.car.driver_config import DriverConfig
+from vehicles.car.params import CarParams
+from vehicles.car.road_protocol import NetworkLike
+from vehicles.car.route import Route
+from vehicles.car.traffic import find_leaders
+
+__all__ = ["CarFleet", "CarState"]
+
+_REF_BAND = 1.0  # m/s; largest lead of the speed reference over the measured speed
+
+
+@dataclass(frozen=True, kw_only=True)
+class CarState:
+    """Ground truth of all cars after a physics step.
+
+    Attributes
+    ----------
+    tick : int
+        Physics tick of the state.
+    p_W : np.ndarray
+        (N, 3) centre-of-mass positions, world ENU (m).
+    q_WB : np.ndarray
+        (N, 4) body-to-world quaternions (x, y, z, w).
+    v_W : np.ndarray
+        (N, 3) velocities (m/s).
+    a_W : np.ndarray
+        (N, 3) accelerations, finite difference of v_W over one physics step (m/s^2).
+    yaw : np.ndarray
+        (N,) headings (rad).
+    speed : np.ndarray
+        (N,) forward speeds v_W . x_B (m/s).
+    road_id : list[str]
+        Road each car is on.
+    s : np.ndarray
+        (N,) arc length on that road (m).
+    lateral : np.ndarray
+        (N,) offset from the road's centre-line, positive left of travel (m).
+    stopped : np.ndarray
+        (N,) True while standing at a junction or at the end of the route.
+    """
+
+    tick: int
+    p_W: np.ndarray
+    q_WB: np.ndarray
+    v_W: np.ndarray
+    a_W: np.ndarray
+    yaw: np.ndarray
+    speed: np.ndarray
+    road_id: list[str]
+    s: np.ndarray
+    lateral: np.ndarray
+    stopped: np.ndarray
+
+
+def _yaw(q: np.ndarray) -> np.ndarray:
+    x, y, z, w = q.T
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+class CarFleet:
+    """Cars, their drivers and their actuation.
+
+    Parameters
+    ----------
+    client_id : int
+        PyBullet client (gravity, time step 1 / physics_hz and a ground plane are the caller's).
+    params, drivers, routes : Sequence
+        One :class:`CarParams`, :class:`DriverConfig` and :class:`Route` per car; each car spawns at rest on its lane
+        centre at ``route.start_s`` of its first road.
+    network : NetworkLike
+        Road graph.
+    physics_hz : int
+        Physics rate (Hz); every driver's ``rate_hz`` must divide it.
+    rng : np.random.Generator
+        Spawned into one child generator per car.
+    """
+
+    def __init__(self, client_id: int, params: Sequence[CarParams], drivers: Sequence[DriverConfig],
+                 routes: Sequence[Route], network: NetworkLike, physics_hz: int, rng: np.random.Generator) -> None:
+        n = len(params)
+        if not (len(drivers) == n == len(routes)) or n == 0:
+            raise ValueError(f"CarFleet needs one params, driver config and route per car, got "
+                             f"{len(params)}/{len(drivers)}/{len(routes)}")
+        self.client_id, self.physics_hz, self.params = client_id, int(physics_hz), list(params)
+        self._every = [cfg.ticks_per_update(physics_hz) for cfg in drivers]
+        self.drivers = [Driver(config=cfg, params=par, route=rt, network=network, rng=g, physics_hz=physics_hz)
+                        for cfg, par, rt, g in zip(drivers, params, routes, rng.spawn(n), strict=True)]
+        spawns = [d.spawn_pose() for d in self.drivers]
+        self._check_spawns(spawns)
+        self.bodies = [CarBody(client_id, par, xy, yaw) for par, (xy, yaw) in zip(params, spawns, strict=True)]
+        self.body_ids = np.array([b.body_id for b in self.bodies], dtype=int)
+        self._lengths = [par.length for par in params]
+        self._v_ref = np.zeros(n)
+        self._steer_ref = np.zeros(n)
+        self._events: list[dict] = []
+        self._off_road = np.zeros(n, dtype=bool)
+        self._tick = 0
+        self._read()
+        self._a_W = np.zeros((n, 3))
+        self._cache: CarState | None = None
+
+    def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
+        for i in range(len(spawns)):
+            for j in range(i):
+                gap = float(np.linalg.norm(spawns[i][0] - spawns[j][0]))
+                need = 0.5 * (self.params[i].length + self.params[j].length)
+                if gap < need:
+                    raise ValueError(f"CarFleet: cars {j} and {i} spawn {gap:.2f} m apart, closer than their half "
+                                     f"lengths {need:.2f} m; separate their Route.start_s")
+
+    def _read(self) -> None:
+        rows = [b.read() for b in self.bodies]
+        self._p_W = np.array([r[0] for r in rows])
+        self._q_WB = np.array([r[1] for r in rows])
+        self._v_W = np.array([r[2] for r in rows])
+        self._omega_z = np.array([r[3][2] for r in rows])
+        self._yaw_arr = _yaw(self._q_WB)
+        self._speed = self._v_W[:, 0] * np.cos(self._yaw_arr) + self._v_W[:, 1] * np.sin(self._yaw_arr)
+
+    def apply_actuation(self) -> None:
+        """Run-loop phase 1: steering and wheel motor targets from the drivers' last commands."""
+        dt = 1.0 / self.physics_hz
+        for i, (drv, body, par) in enumerate(zip(self.drivers, self.bodies, self.params, strict=True)):
+            cmd = drv.command
+            if cmd.hold:
+                self._v_ref[i] = 0.0
+            else:
+                self._v_ref[i] = min(max(self._v_ref[i] + cmd.accel * dt, 0.0), par.max_speed)
+            step = par.max_steer_rate * dt
+            self._steer_ref[i] += min(max(cmd.steer - self._steer_ref[i], -step), step)
+            body.apply(self._steer_ref[i], self._v_ref[i], braking=cmd.hold or cmd.accel < 0.0)
+
+    def after_step(self, tick: int) -> None:
+        """After ``p.stepSimulation()``: read the cars' state and run the drivers due at ``tick``."""
+        v_prev = self._v_W
+        self._read()
+        self._a_W = (self._v_W - v_prev) * self.physics_hz
+        self._tick = tick
+        self._cache = None
+        due = [i for i, e in enumerate(self._every) if tick % e == 0]
+        if not due:
+            return
+        leaders = find_leaders(self.drivers, self._p_W[:, :2], self._yaw_arr, self._speed, self._lengths)
+        for i in due:
+            drv = self.drivers[i]
+            drv.update(self._p_W[i, :2], float(self._yaw_arr[i]), float(self._speed[i]), tick, leaders[i],
+                       float(self._omega_z[i]))
+            v = max(float(self._speed[i]), 0.0)
+            self._v_ref[i] = min(max(self._v_ref[i], v - _REF_BAND), v + _REF_BAND)
+            self._events += [dict(e, car=i) for e in drv.pop_events()]
+            self._check_road(i, tick)
+
+    def _check_road(self, i: int, tick: int) -> None:
+        """Events when a car's centre leaves the street (|lateral| > lanes x lane_width) or comes back."""
+        drv = self.drivers[i]
+        road_id, s, lateral = drv.locate(self._p_W[i, :2])
+        road = drv.network.roads[road_id]
+        off = abs(lateral) > road.lanes * road.lane_width
+        if off != self._off_road[i]:
+            self._off_road[i] = off
+            self._events.append({"type": "car_left_road" if off else "car_back_on_road", "car": i, "tick": tick,
+                                 "road": road_id, "s": s, "lateral": lateral})
+
+    @property
+    def state(self) -> CarState:
+        """Ground truth after the last ``after_step``."""
+        if self._cache is None:
+            located = [d.locate(self._p_W[i, :2]) for i, d in enumerate(self.drivers)]
+            self._cache = CarState(
+                tick=self._tick, p_W=self._p_W.copy(), q_WB=self._q_WB.copy(), v_W=self._v_W.copy(),
+                a_W=self._a_W.copy(), yaw=self._yaw_arr.copy(), speed=self._speed.copy(),
+                road_id=[r[0] for r in located], s=np.array([r[1] for r in located]),
+                lateral=np.array([r[2] for r in located]), stopped=np.array([d.stopped for d in self.drivers]))
+        return self._cache
+
+    def pop_events(self) -> list[dict]:
+        """Events since the last call: ``car_stop``, ``car_go``, ``car_enter_road``, ``car_route_end``,
+        ``car_left_road``, ``car_back_on_road``; each has ``type``, ``car`` (index) and ``tick``."""
+        ev, self._events = self._events, []
+        return ev
+
+    def __len__(self) -> int:
+        return len(self.drivers)

@@ -1,0 +1,203 @@
+"""A driver's lane path: the lane centre-line over the next few roads of a route as one dense polyline.
+
+Road sections are sampled from each road's lane centre (:func:`~vehicles.car.road_protocol.sample_road`); at each
+junction the last ``corner_length`` metres of the incoming lane and the first ``corner_length`` metres of the outgoing
+lane are replaced by a cubic Bezier corner whose handles approximate a circular arc through the heading change
+dpsi: handle = chord (4/3) tan(dpsi/4) / (2 sin(dpsi/2)) (-> chord/3 for a straight junction).
+Junctions where the lane runs straight on (heading change < 0.02 rad, lanes meeting) are joined directly.
+Everything a driver needs (projection, heading, curvature, speed limit, junction stop points) is read from it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vehicles.car.road_protocol import RoadLike, sample_road
+
+__all__ = ["LanePath", "PathProjection"]
+
+_SMOOTH_HEADING = 0.02  # rad; a junction with a smaller heading change (and lane gap) joins without a corner
+_SMOOTH_GAP = 0.05  # m
+
+
+@dataclass(frozen=True, kw_only=True)
+class PathProjection:
+    """Closest point of a lane path to a query point.
+
+    Attributes
+    ----------
+    s : float
+        Arc length along the path (m).
+    lateral : float
+        Signed distance from the path, positive to the left of travel (m).
+    heading : float
+        Path heading there (rad).
+    index : int
+        Index of the path segment [index, index + 1] holding the point.
+    """
+
+    s: float
+    lateral: float
+    heading: float
+    index: int
+
+
+def _wrap(a: float | np.ndarray) -> float | np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _bezier(p0: np.ndarray, t0: np.ndarray, p3: np.ndarray, t3: np.ndarray,
+            n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cubic Bezier corner from p0 (tangent t0) to p3 (tangent t3): points, headings, curvatures at n params."""
+    chord = float(np.linalg.norm(p3 - p0))
+    dpsi = abs(float(_wrap(math.atan2(t3[1], t3[0]) - math.atan2(t0[1], t0[0]))))
+    if dpsi < 1e-6:
+        handle = chord / 3.0
+    else:
+        handle = chord * (4.0 / 3.0) * math.tan(dpsi / 4.0) / (2.0 * math.sin(dpsi / 2.0))
+    p1, p2 = p0 + handle * t0, p3 - handle * t3
+    u = np.linspace(0.0, 1.0, n)[:, None]
+    pts = (1 - u) ** 3 * p0 + 3 * (1 - u) ** 2 * u * p1 + 3 * (1 - u) * u ** 2 * p2 + u ** 3 * p3
+    d1 = 3 * (1 - u) ** 2 * (p1 - p0) + 6 * (1 - u) * u * (p2 - p1) + 3 * u ** 2 * (p3 - p2)
+    d2 = 6 * (1 - u) * (p2 - 2 * p1 + p0) + 6 * u * (p3 - 2 * p2 + p1)
+    speed = np.maximum(np.linalg.norm(d1, axis=1), 1e-9)
+    kappa = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / speed ** 3
+    return pts, np.arctan2(d1[:, 1], d1[:, 0]), kappa
+
+
+class LanePath:
+    """Lane centre-line through a sequence of connected roads, sampled every ``ds`` metres.
+
+    Parameters
+    ----------
+    roads : Sequence[RoadLike]
+        Consecutive roads (each road's end node is the next one's start node).
+    lanes : Sequence[int]
+        Lane index to follow on each road (clipped to the road's lane count).
+    s_start : float
+        Arc length on the first road where the path begins (m).
+    ds : float
+        Sample spacing (m).
+    corner_length : float
+        Length cut from each side of a junction and replaced by the corner (m); at most 45 % of a road.
+
+    Attributes
+    ----------
+    xy, heading, kappa, s : np.ndarray
+        (N, 2) points (m), (N,) headings (rad), signed curvatures (1/m), cumulative arc length (m).
+    road_index : np.ndarray
+        (N,) index into ``roads`` of the road each sample belongs to.
+    road_s : np.ndarray
+        (N,) arc length of each sample on its road's centre-line (m).
+    in_corner : np.ndarray
+        (N,) True for the samples of junction corners.
+    speed_limit : np.ndarray
+        (N,) speed limit of each sample's road (m/s).
+    lane_offset : np.ndarray
+        (N,) lateral offset of the followed lane from its road's centre-line (m).
+    junction_s : np.ndarray
+        (len(roads) - 1,) path arc length where the corner into road k + 1 begins, i.e. the stop line of road k (m).
+    """
+
+    def __init__(self, roads: Sequence[RoadLike], lanes: Sequence[int], s_start: float = 0.0, ds: float = 1.0,
+                 corner_length: float = 8.0) -> None:
+        if len(roads) == 0 or len(roads) != len(lanes):
+            raise ValueError(f"LanePath needs one lane per road and at least one road, got {len(roads)}/{len(lanes)}")
+        self.roads = list(roads)
+        offsets = [r.lane_offset(int(min(max(lane, 0), r.lanes - 1))) for r, lane in zip(roads, lanes, strict=True)]
+        smooth = [self._smooth_join(roads[k], roads[k + 1], offsets[k], offsets[k + 1])
+                  for k in range(len(roads) - 1)]
+        cuts = [min(corner_length, 0.45 * r.length) for r in roads]
+        xy, hd, kp, ri, rs, cm = [], [], [], [], [], []
+        junction_index: list[int] = []
+        for k, road in enumerate(roads):
+            a = s_start if k == 0 else (0.0 if smooth[k - 1] else cuts[k])
+            b = road.length - cuts[k] if k + 1 < len(roads) and not smooth[k] else road.length
+            a = min(a, b)
+            n = max(2, int(math.ceil((b - a) / ds)) + 1)
+            s = np.linspace(a, b, n)
+            p, h, kap = sample_road(road, s, offsets[k])
+            if k > 0 and smooth[k - 1]:  # tangent-continuous join: no corner, drop the duplicated node sample
+                junction_index.append(sum(len(x) for x in xy) - 1)
+                s, p, h, kap, n = s[1:], p[1:], h[1:], kap[1:], n - 1
+            elif k > 0:  # corner from the previous road's cut end into this road's cut start
+                prev = roads[k - 1]
+                pts, ch, ck = _bezier(xy[-1][-1], np.array([math.cos(hd[-1][-1]), math.sin(hd[-1][-1])]),
+                                      p[0], np.array([math.cos(h[0]), math.sin(h[0])]),
+                                      max(3, int(math.ceil(2 * (cuts[k - 1] + cuts[k]) / ds)) + 1))
+                inner = slice(1, -1)
+                m = len(pts) - 2
+                half = m // 2
+                xy.append(pts[inner]), hd.append(ch[inner]), kp.append(ck[inner])
+                ri.append(np.r_[np.full(half, k - 1), np.full(m - half, k)])
+                cm.append(np.ones(m, dtype=bool))
+                u = np.linspace(0, 1, m + 2)[1:-1]
+                rs.append(np.where(np.arange(m) < half, prev.length - cuts[k - 1] + 2 * u * cuts[k - 1],
+                                   (2 * u - 1) * cuts[k]))
+                junction_index.append(sum(len(x) for x in xy[:-1]) - 1)
+            xy.append(p), hd.append(h), kp.append(kap), ri.append(np.full(n, k)), rs.append(s)
+            cm.append(np.zeros(n, dtype=bool))
+        self.xy = np.concatenate(xy)
+        self.heading = np.concatenate(hd)
+        self.kappa = np.concatenate(kp)
+        self.road_index = np.concatenate(ri).astype(int)
+        self.road_s = np.concatenate(rs)
+        self.in_corner = np.concatenate(cm)
+        seg = np.linalg.norm(np.diff(self.xy, axis=0), axis=1)
+        self.s = np.r_[0.0, np.cumsum(seg)]
+        self.speed_limit = np.array([roads[i].speed_limit for i in self.road_index])
+        self.lane_offset = np.array([offsets[i] for i in self.road_index])
+        js = self.s[np.asarray(junction_index, dtype=int)] if junction_index else np.zeros(0)
+        # the stop line of a smooth join (no corner) is still ``corner_length`` before the node
+        self.junction_s = np.maximum(js - np.where(np.asarray(smooth, dtype=bool), corner_length, 0.0), 0.0)
+        self._t = np.diff(self.xy, axis=0) / np.maximum(seg, 1e-12)[:, None]
+        self._seg = seg
+
+    @staticmethod
+    def _smooth_join(a: RoadLike, b: RoadLike, off_a: float, off_b: float) -> bool:
+        """True when lane ``a`` runs on into lane ``b`` without a heading or position jump (no corner needed)."""
+        pa, ha, _ = sample_road(a, np.array([a.length]), off_a)
+        pb, hb, _ = sample_road(b, np.array([0.0]), off_b)
+        jump = abs(float(_wrap(hb[0] - ha[0])))
+        return jump < _SMOOTH_HEADING and float(np.linalg.norm(pb[0] - pa[0])) < _SMOOTH_GAP
+
+    @property
+    def length(self) -> float:
+        """Total arc length (m)."""
+        return float(self.s[-1])
+
+    def project(self, p_xy: np.ndarray, hint: int | None = None, window: int = 60) -> PathProjection:
+        """Closest point of the path to ``p_xy`` (m), searching segments near ``hint`` (all when None)."""
+        n = len(self._seg)
+        lo, hi = (0, n) if hint is None else (max(0, hint - window), min(n, hint + window))
+        a = self.xy[lo:hi]
+        t = self._t[lo:hi]
+        d = np.asarray(p_xy, dtype=float)[:2] - a
+        u = np.clip(np.einsum("ij,ij->i", d, t), 0.0, self._seg[lo:hi])
+        r = d - u[:, None] * t
+        i = int(np.argmin(np.einsum("ij,ij->i", r, r)))
+        k = lo + i
+        lateral = float(t[i, 0] * d[i, 1] - t[i, 1] * d[i, 0])
+        frac = u[i] / max(self._seg[k], 1e-12)
+        heading = float(self.heading[k] + frac * _wrap(self.heading[k + 1] - self.heading[k]))
+        return PathProjection(s=float(self.s[k] + u[i]), lateral=lateral, heading=heading, index=k)
+
+    def locate(self, s: float) -> tuple[int, float]:
+        """(road index, arc length on that road's centre-line (m)) of path arc length ``s``."""
+        s = float(np.clip(s, 0.0, self.length))
+        k = int(np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, len(self.s) - 2))
+        frac = (s - self.s[k]) / max(self._seg[k], 1e-12)
+        if self.road_index[k] != self.road_index[k + 1]:
+            return int(self.road_index[k]), float(self.road_s[k])
+        return int(self.road_index[k]), float(self.road_s[k] + frac * (self.road_s[k + 1] - self.road_s[k]))
+
+    def s_of_road(self, road_index: int, road_s: float) -> float:
+        """Path arc length of arc length ``road_s`` on road ``road_index`` (m), clipped to the path."""
+        sel = np.flatnonzero(self.road_index == road_index)
+        if len(sel) == 0:
+            raise ValueError(f"road index {road_index} is not on this path")
+        return float(np.interp(road_s, self.road_s[sel], self.s[sel]))

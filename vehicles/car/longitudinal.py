@@ -1,0 +1,63 @@
+"""Longitudinal driving laws: the curvature / speed-limit / stop speed envelope and the IDM+ car-following term.
+
+Speed envelope over the points i ahead (distance d_i >= 0, speed cap v_i):
+    v_i = min(cruise_i, sqrt(a_lat,max / |kappa_i|)),  v_i = 0 at a stop line,
+    v_target = min_i sqrt(v_i^2 + 2 b_plan d_i),
+    a_track = k_v (v_target - v),
+    a_brake = min_{i: d_i >= d_min, v > v_i} (v_i^2 - v^2) / (2 d_i)   (constant deceleration reaching v_i at d_i),
+    a_free  = min(a_track, a_brake).
+Car following, IDM+ (Schakel, Knoop, van Arem, TRR 2188, 2010), interaction term only:
+    s* = s0 + max(0, v T + v (v - v_lead) / (2 sqrt(a b))),   a_int = a (1 - (s*/s)^2),
+so that at equal speeds the equilibrium gap is exactly s0 + v T (plain IDM's free-road term would widen it by
+1 / sqrt(1 - (v/v0)^delta)). The command is min(a_free, a_int) clipped to [-b_max, a_max].
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["curve_speed", "envelope_accel", "idm_plus_accel"]
+
+
+def curve_speed(kappa: np.ndarray, lateral_accel_max: float) -> np.ndarray:
+    """Largest speed with lateral acceleration v^2 |kappa| <= ``lateral_accel_max`` (m/s); inf on straights."""
+    k = np.abs(np.asarray(kappa, dtype=float))
+    with np.errstate(divide="ignore"):
+        return np.where(k > 1e-9, np.sqrt(lateral_accel_max / np.maximum(k, 1e-300)), np.inf)
+
+
+def envelope_accel(v: float, d: np.ndarray, v_cap: np.ndarray, *, gain: float, decel_plan: float,
+                   min_distance: float) -> tuple[float, float]:
+    """Acceleration command (m/s^2) keeping the speed under the envelope of the caps ahead, and v_target (m/s).
+
+    Parameters
+    ----------
+    v : float
+        Current speed (m/s).
+    d : np.ndarray
+        (M,) distances ahead along the path of the capped points (m); d[0] = 0 is the car's own position.
+    v_cap : np.ndarray
+        (M,) speed caps at those points (m/s), finite.
+    gain : float
+        Speed-tracking gain k_v (1/s).
+    decel_plan : float
+        Deceleration b_plan of the planning envelope (m/s^2).
+    min_distance : float
+        Caps nearer than this (m) use only the tracking term.
+    """
+    d = np.maximum(np.asarray(d, dtype=float), 0.0)
+    v_cap = np.asarray(v_cap, dtype=float)
+    v_target = float(np.min(np.sqrt(v_cap ** 2 + 2.0 * decel_plan * d)))
+    a = gain * (v_target - v)
+    far = (d >= min_distance) & (v_cap < v)
+    if np.any(far):
+        a = min(a, float(np.min((v_cap[far] ** 2 - v * v) / (2.0 * d[far]))))
+    return a, v_target
+
+
+def idm_plus_accel(v: float, v_lead: float, gap: float, *, s0: float, time_headway: float, accel: float,
+                   decel: float) -> float:
+    """IDM+ interaction acceleration a (1 - (s*/s)^2) behind a leader ``gap`` metres ahead (bumper to bumper)."""
+    s_star = s0 + max(0.0, v * time_headway + v * (v - v_lead) / (2.0 * np.sqrt(accel * decel)))
+    s = max(gap, 1e-3)
+    return float(accel * (1.0 - (s_star / s) ** 2))

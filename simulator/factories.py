@@ -159,8 +159,9 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
         if not g.route.stop_at_junctions:
             overrides.setdefault("stop_probability", 0.0)
         drivers.append(DriverConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in overrides.items()}))
+        where = dict(start_s=g.route.start_s, lane=g.route.lane)
         if g.route.roads is not None:
-            routes.append(Route(roads=tuple(g.route.roads)))
+            routes.append(Route(roads=tuple(g.route.roads), **where))
         else:
-            routes.append(Route(random_walk=True, start_road=g.route.random_walk_from))
+            routes.append(Route(random_walk=True, start_road=g.route.random_walk_from, **where))
     return CarFleet(client, params, drivers, routes, network, physics_hz, rng)

@@ -145,6 +145,8 @@ class BuildingSpec(Strict):
 class RouteSpec(Strict):
     roads: list[str] | None = Field(None, description="a fixed sequence of road ids")
     random_walk_from: str | None = Field(None, description="start road of a seeded random walk over the network")
+    start_s: NonNegFloat = Field(0.0, description="arc length along the first road where the vehicle starts, m")
+    lane: int = Field(0, ge=0, description="lane index, 0 = rightmost")
     stop_at_junctions: bool = True
 
     @model_validator(mode="after")

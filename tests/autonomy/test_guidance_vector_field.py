@@ -1,0 +1,52 @@
+"""Lyapunov vector-field guidance: field properties and closed-loop convergence (quadrotor scale: r_d = 120 m)."""
+
+import numpy as np
+import pytest
+
+from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
+from autonomy.guidance.unicycle import UnicycleParams
+from autonomy.guidance.vector_field import VectorFieldConfig, VectorFieldGuidance, wrap_angle
+
+RD = 120.0
+
+
+def test_field_magnitude_and_lyapunov_decrease():
+    g = VectorFieldGuidance(VectorFieldConfig(standoff_radius=RD, nominal_speed=12.0))
+    rng = np.random.default_rng(3)
+    for r in rng.uniform(-500, 500, size=(200, 2)):
+        v = g.field(r, 12.0)
+        assert np.linalg.norm(v) == pytest.approx(12.0, rel=1e-12)
+        rho = np.linalg.norm(r)
+        vdot = 4 * (rho**2 - RD**2) * (r @ v)  # d/dt (ρ² − r_d²)²
+        expected = -4 * 12.0 * rho * (rho**2 - RD**2) ** 2 / (rho**2 + RD**2)
+        assert vdot == pytest.approx(expected, rel=1e-9, abs=1e-6)
+    # on the circle the field is tangential, counter-clockwise
+    np.testing.assert_allclose(g.field(np.array([RD, 0.0]), 12.0), [0.0, 12.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("start", [(25.0, 10.0), (450.0, -300.0)], ids=["inside", "outside"])
+def test_converges_to_standoff_circle(start):
+    cfg = VectorFieldConfig(standoff_radius=RD, nominal_speed=12.0, max_speed=20.0, max_heading_rate=0.6)
+    loop = LoopConfig(dt=0.1, steps=2000, target_v=(4.0, 1.0), plant=UnicycleParams(tau_v=0.3, tau_omega=0.3))
+    res = run_kinematic_loop([VectorFieldGuidance(cfg)], np.array([[*start, 0.5, 10.0, 0.0]]), loop)
+    err = np.abs(res.ranges[-400:, 0] - RD)
+    assert err.max() < 0.01 * RD
+    assert abs(res.ranges[0, 0] - RD) > 50.0
+
+
+def test_phase_keeping_two_uavs():
+    cfg = VectorFieldConfig(standoff_radius=RD, nominal_speed=12.0, max_speed=20.0, team_size=2, phase_gain=0.5)
+    laws = [VectorFieldGuidance(cfg, slot=0), VectorFieldGuidance(cfg, slot=1)]
+    loop = LoopConfig(dt=0.1, steps=3000, target_v=(3.0, 0.0), plant=UnicycleParams(tau_v=0.3, tau_omega=0.3))
+    res = run_kinematic_loop(laws, np.array([[150.0, 0.0, 1.5, 12.0, 0.0], [100.0, 60.0, 2.5, 12.0, 0.0]]), loop)
+    ph = res.phases[-500:]
+    err = np.degrees(np.abs(wrap_angle(ph[:, 1] - ph[:, 0] - np.pi)))
+    assert err.max() < 3.0
+    assert np.degrees(abs(wrap_angle(res.phases[0, 1] - res.phases[0, 0] - np.pi))) > 90.0
+
+
+def test_no_target_loiters():
+    from autonomy.guidance.types import OwnState
+    g = VectorFieldGuidance(VectorFieldConfig())
+    sp = g.command(OwnState(t=0, p_W=[0, 0, 50], v_W=[0, 0, 0], yaw=0.0), None, [], 0.0)
+    assert sp.heading_rate == pytest.approx(12.0 / 120.0)

@@ -26,6 +26,9 @@ def curve_speed(kappa: np.ndarray, lateral_accel_max: float) -> np.ndarray:
         return np.where(k > 1e-9, np.sqrt(lateral_accel_max / np.maximum(k, 1e-300)), np.inf)
 
 
+_BRAKE_CURVE_MARGIN = 0.5  # m/s below a braking curve at which its exact braking term starts to apply
+
+
 def envelope_accel(v: float, d: np.ndarray, v_cap: np.ndarray, *, gain: float, decel_plan: float,
                    min_distance: float) -> tuple[float, float]:
     """Acceleration command (m/s^2) keeping the speed under the envelope of the caps ahead, and v_target (m/s).
@@ -47,9 +50,12 @@ def envelope_accel(v: float, d: np.ndarray, v_cap: np.ndarray, *, gain: float, d
     """
     d = np.maximum(np.asarray(d, dtype=float), 0.0)
     v_cap = np.asarray(v_cap, dtype=float)
-    v_target = float(np.min(np.sqrt(v_cap ** 2 + 2.0 * decel_plan * d)))
+    v_curve = np.sqrt(v_cap ** 2 + 2.0 * decel_plan * d)  # braking curve of each cap, evaluated here
+    v_target = float(np.min(v_curve))
     a = gain * (v_target - v)
-    far = (d >= min_distance) & (v_cap < v)
+    # exact braking only for caps whose braking curve the car has (nearly) reached: a car creeping far below the
+    # curve must be allowed to speed up, not held at a standstill by a tiny braking demand
+    far = (d >= min_distance) & (v_cap < v) & (v >= v_curve - _BRAKE_CURVE_MARGIN)
     if np.any(far):
         a = min(a, float(np.min((v_cap[far] ** 2 - v * v) / (2.0 * d[far]))))
     return a, v_target

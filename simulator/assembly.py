@@ -16,7 +16,7 @@ from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.messages import StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
-from simulator.factories import build_estimator, build_guidance, build_idle_guidance, build_sensor
+from simulator.factories import build_estimator, build_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery
@@ -294,8 +294,7 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
                                 lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
-        idle = None if options.guidance_factory is not None else build_idle_guidance(u)
-        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, idle),
+        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents)
 

@@ -18,8 +18,8 @@ from worlds.schema import BearingSpec, BoxSpec, CameraSpec, FovSpec, RadarSpec, 
 __all__ = [
     "build_car_fleet",
     "build_estimator",
+    "build_channel",
     "build_guidance",
-    "build_idle_guidance",
     "build_sensor",
     "fleet_options",
 ]
@@ -100,16 +100,11 @@ def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> 
         from autonomy.guidance.nmpc_config import NmpcConfig
 
         return NmpcStandoffGuidance(NmpcConfig(**common, **g.params), slot=index, buildings=buildings)
+    if g.type == "fast_mpc":
+        from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
+
+        return FastMpcGuidance(FastMpcConfig(altitude=g.altitude, **g.params))
     raise ValueError(f"unknown guidance type {g.type!r}")
-
-
-def build_idle_guidance(uav: UavSpec) -> Any:
-    """What a target-following UAV flies while it has no estimate: hold its start point at the guidance altitude."""
-    g = uav.autonomy.guidance
-    if g.type in ("hold", "waypoints", "plugin"):
-        return None
-    x, y, _ = uav.initial.position
-    return WaypointGuidance(WaypointConfig(waypoints=((x, y, g.altitude),), speed=g.speed))
 
 
 def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:

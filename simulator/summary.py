@@ -53,7 +53,7 @@ class MetricsTracker:
         world = asm.world_spec
         for i, u in enumerate(world.uavs if world is not None else []):
             g = u.autonomy.guidance
-            if g.type in ("vector_field", "nmpc", "orbit"):
+            if g.type in ("vector_field", "nmpc"):
                 self.standoffs[i] = g.standoff_m
 
     def observe(self, tick: int, asm: Any) -> None:

@@ -262,7 +262,7 @@ class EstimatorSpec(Strict):
 
 
 class GuidanceSpec(Strict):
-    type: Literal["hold", "waypoints", "vector_field", "nmpc", "plugin"] = "hold"
+    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "plugin"] = "hold"
     plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
     standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
     speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")

@@ -1,0 +1,1 @@
+"""Airframe parameter files, one module per airframe, each exposing ``PARAMS``."""

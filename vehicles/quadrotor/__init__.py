@@ -1,0 +1,1 @@
+"""Quadrotor model: airframe parameters, per-rotor physics in PyBullet, cascaded flight controllers and the fleet."""

@@ -1,0 +1,290 @@
+"""A fleet of quadrotors in one PyBullet client: per-rotor physics and the flight-control cascade, vectorised.
+
+Run loop contract, per physics tick ``k = 1, 2, ...``::
+
+    fleet.apply_actuation()      # rotor lag, thrust/torque, drag, wind, downwash, ground effect -> 1 force + 1 torque
+    p.stepSimulation()
+    fleet.after_step(k)          # read state; outer loops when k % (physics_hz / outer_loop_hz) == 0; inner loops
+
+Frames: world ENU, body FLU; forces and torques are handed to PyBullet in the world frame at the centre of mass
+(``WORLD_FRAME``) after rotating them from the body frame here. PyBullet has had ``LINK_FRAME`` and ``WORLD_FRAME``
+swapped for torques on the base (bullet3 issue #1949); rotating explicitly does not depend on which behaviour the
+installed version has, and ``tests/vehicles/test_quad_physics.py`` checks that a body-frame torque produces
+``J^{-1} tau_B``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from itertools import chain
+
+import numpy as np
+import pybullet as p
+
+from vehicles.quadrotor.aero import DownwashConfig, body_drag_B, downwash_force_W, ground_effect_factor
+from vehicles.quadrotor.command_shaping import CommandShaper
+from vehicles.quadrotor.commands import FlightCommand
+from vehicles.quadrotor.inner_loop import AttitudeController, RateController
+from vehicles.quadrotor.mixer import MotorMixer
+from vehicles.quadrotor.outer_loop import ThrustVectorController, VelocityController
+from vehicles.quadrotor.params import GRAVITY, QuadrotorParams
+from vehicles.quadrotor.rotation import quat_to_rotmat, rotate_T, yaw_to_quat
+from vehicles.quadrotor.rotors import RotorBank
+from vehicles.quadrotor.setpoints import AttitudeSetpoint
+from vehicles.quadrotor.stack import AirframeStack, batched_matvec
+from vehicles.quadrotor.state import FleetState
+from vehicles.quadrotor.wind import DrydenWind, WindConfig
+
+__all__ = ["FleetOptions", "QuadrotorFleet", "check_rate"]
+
+
+def check_rate(name: str, rate_hz: object, physics_hz: int) -> int:
+    """Return ``physics_hz // rate_hz`` (ticks per period) or raise naming ``name`` if it is not an integer divisor."""
+    if not isinstance(rate_hz, (int, np.integer)) or isinstance(rate_hz, bool) or rate_hz <= 0:
+        raise ValueError(f"{name} must be a positive integer (Hz), got {rate_hz!r}")
+    if physics_hz % rate_hz != 0:
+        raise ValueError(f"{name}={rate_hz} Hz does not divide physics_hz={physics_hz} Hz")
+    return physics_hz // int(rate_hz)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FleetOptions:
+    """Physics and control options shared by every UAV of a fleet.
+
+    Attributes
+    ----------
+    wind : WindConfig | None
+        Mean wind plus Dryden turbulence; ``None`` for still air.
+    downwash : bool
+        Apply the wake of each UAV to the UAVs below it (:class:`~vehicles.quadrotor.aero.DownwashConfig`).
+    downwash_model : DownwashConfig
+        Constants of the downwash model.
+    ground_effect : bool
+        Scale each rotor's thrust by the Cheeseman-Bennett factor near the ground plane.
+    ground_z : float
+        Height of the ground plane for ground effect (m).
+    ground_effect_min_height_ratio : float
+        Rotor height floor, in rotor radii, below which the ground-effect factor stops growing (-), > 0.25.
+    outer_loop_hz : int
+        Rate of the position and velocity loops (Hz); must divide ``physics_hz``.
+    """
+
+    wind: WindConfig | None = None
+    downwash: bool = False
+    downwash_model: DownwashConfig = field(default_factory=DownwashConfig)
+    ground_effect: bool = False
+    ground_z: float = 0.0
+    ground_effect_min_height_ratio: float = 0.5
+    outer_loop_hz: int = 48
+
+    def __post_init__(self) -> None:
+        hz = self.outer_loop_hz
+        if not (isinstance(hz, (int, np.integer)) and not isinstance(hz, bool) and hz > 0):
+            raise ValueError(f"FleetOptions.outer_loop_hz must be a positive integer (Hz), got {self.outer_loop_hz!r}")
+        if not (self.ground_effect_min_height_ratio > 0.25):
+            raise ValueError("FleetOptions.ground_effect_min_height_ratio must be > 0.25, got "
+                             f"{self.ground_effect_min_height_ratio!r}")
+        if not np.isfinite(self.ground_z):
+            raise ValueError(f"FleetOptions.ground_z must be finite, got {self.ground_z!r}")
+
+
+class QuadrotorFleet:
+    """N quadrotor bodies in PyBullet client ``client_id`` with their flight controllers.
+
+    Parameters
+    ----------
+    client_id : int
+        PyBullet physics client (gravity ``-9.81`` m/s^2 and ``fixedTimeStep = 1/physics_hz`` set by the caller).
+    airframes : Sequence[QuadrotorParams]
+        One airframe per UAV.
+    p0_W : np.ndarray
+        (N, 3) initial positions (m).
+    yaw0 : np.ndarray
+        (N,) initial headings (rad).
+    physics_hz : int
+        Physics rate (Hz).
+    options : FleetOptions
+        Shared options.
+    rng : np.random.Generator
+        Randomness (wind turbulence).
+
+    Notes
+    -----
+    Every UAV starts hovering at ``p0_W`` with rotors at hover speed and the command ``PositionCommand(p0_W, yaw0)``.
+    A command given with :meth:`set_command` takes effect at the next outer-loop tick.
+    """
+
+    def __init__(self, client_id: int, airframes: Sequence[QuadrotorParams], p0_W: np.ndarray, yaw0: np.ndarray,
+                 physics_hz: int, options: FleetOptions, rng: np.random.Generator) -> None:
+        if not isinstance(physics_hz, (int, np.integer)) or isinstance(physics_hz, bool) or physics_hz <= 0:
+            raise ValueError(f"physics_hz must be a positive integer (Hz), got {physics_hz!r}")
+        self._outer_div = check_rate("FleetOptions.outer_loop_hz", options.outer_loop_hz, int(physics_hz))
+        n = len(airframes)
+        p0_W = np.asarray(p0_W, dtype=float)
+        yaw0 = np.asarray(yaw0, dtype=float)
+        if p0_W.shape != (n, 3) or not np.all(np.isfinite(p0_W)):
+            raise ValueError(f"p0_W must be finite with shape ({n}, 3) for {n} airframes, got shape {p0_W.shape}")
+        if yaw0.shape != (n,) or not np.all(np.isfinite(yaw0)):
+            raise ValueError(f"yaw0 must be finite with shape ({n},) for {n} airframes, got shape {yaw0.shape}")
+        self.client_id = client_id
+        self.physics_hz = int(physics_hz)
+        self.options = options
+        self.airframes = tuple(airframes)
+        self._dt = 1.0 / self.physics_hz
+        s = self._s = AirframeStack.from_params(self.airframes)
+        self.body_ids = self._create_bodies(p0_W, yaw0)
+        self._body_list: list[int] = self.body_ids.tolist()
+
+        hover = np.sqrt(s.mass * GRAVITY / (4.0 * s.k_f))
+        self._rotors = RotorBank(s, self._dt, np.repeat(hover[:, None], 4, axis=1))
+        self._thrust = s.k_f[:, None] * self._rotors.omega**2
+        self._wind = DrydenWind(options.wind, n, self._dt, rng) if options.wind is not None else None
+        self._wake_radius = np.array([a.arm_length + a.rotor_radius for a in self.airframes])
+        self._disk_area = 4.0 * np.pi * s.rotor_radius**2
+        self._rotor_r = s.rotor_pos_B
+        self._alloc = s.shared(s.alloc)
+
+        self._vel_ctrl = VelocityController(s, self._outer_div * self._dt)
+        self._tv_ctrl = ThrustVectorController(s)
+        self._att_ctrl = AttitudeController(s)
+        self._rate_ctrl = RateController(s)
+        self._mixer = MotorMixer(s)
+
+        self._tick = 0
+        self._events: list[dict] = []
+        self._read_state()
+        self._shaper = CommandShaper(s, self._dt, self._state)
+        F0 = np.zeros((n, 3))
+        F0[:, 2] = s.mass * GRAVITY
+        self._att_sp = AttitudeSetpoint(F_W=F0, yaw=yaw0.copy(), yaw_rate=np.zeros(n))
+        self._tilt_saturated = np.zeros(n, dtype=bool)
+        self.force_W = np.zeros((n, 3))
+        """(N, 3) total external force applied at the last :meth:`apply_actuation`, world frame (N)."""
+        self.torque_W = np.zeros((n, 3))
+        """(N, 3) total external torque applied at the last :meth:`apply_actuation`, world frame (N m)."""
+        self.downwash_W = np.zeros((n, 3))
+        """(N, 3) downwash part of ``force_W`` (N)."""
+        self.wind_W = np.zeros((n, 3))
+        """(N, 3) wind velocity at each UAV at the last step (m/s)."""
+
+    # ------------------------------------------------------------------ construction
+    def _create_bodies(self, p0_W: np.ndarray, yaw0: np.ndarray) -> np.ndarray:
+        cid = self.client_id
+        shapes: dict[tuple[float, float, float], tuple[int, int]] = {}
+        q0 = yaw_to_quat(yaw0)
+        ids = []
+        for i, a in enumerate(self.airframes):
+            key = tuple(a.body_half_extents)
+            if key not in shapes:
+                shapes[key] = (
+                    p.createCollisionShape(p.GEOM_BOX, halfExtents=list(a.body_half_extents), physicsClientId=cid),
+                    p.createVisualShape(p.GEOM_BOX, halfExtents=list(a.body_half_extents),
+                                        rgbaColor=[0.2, 0.2, 0.25, 1.0], physicsClientId=cid),
+                )
+            col, vis = shapes[key]
+            b = p.createMultiBody(baseMass=a.mass, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+                                  basePosition=p0_W[i].tolist(), baseOrientation=q0[i].tolist(),
+                                  baseInertialFramePosition=[0.0, 0.0, 0.0], physicsClientId=cid)
+            p.changeDynamics(b, -1, localInertiaDiagonal=list(a.inertia), linearDamping=0.0, angularDamping=0.0,
+                             physicsClientId=cid)
+            ids.append(b)
+        return np.array(ids, dtype=int)
+
+    # ------------------------------------------------------------------ run loop
+    def apply_actuation(self) -> None:
+        """Run-loop phase 1: advance the rotors one step and apply each UAV's total force and torque.
+
+        Rotor thrust ``k_f w^2`` (times the ground-effect factor), reaction torques ``k_m w^2``, body drag of the
+        air-relative velocity and downwash are evaluated on the state read at the previous :meth:`after_step` and held
+        over the step (PyBullet clears external forces after each ``stepSimulation``).
+        """
+        st, s, opt = self._state, self._s, self.options
+        R = st.R_WB
+        f_nom = self._rotors.step()
+        f = f_nom
+        if opt.ground_effect:
+            rotor_z = st.p_W[:, 2:3] + np.matmul(self._rotor_r, R[:, 2, :, None])[:, :, 0] - opt.ground_z
+            f = f_nom * ground_effect_factor(rotor_z, s.rotor_radius[:, None], opt.ground_effect_min_height_ratio)
+        self._thrust = f
+        rotor_wrench = batched_matvec(self._alloc, f)  # (T, tau_x, tau_y, tau_z) per UAV
+        total = rotor_wrench[:, 0]
+        v_rel = st.v_W
+        if self._wind is not None:
+            self.wind_W = self._wind.step()
+            v_rel = v_rel - self.wind_W
+        wrench_B = np.empty((s.n, 3, 2))
+        wrench_B[:, :, 0] = body_drag_B(rotate_T(R, v_rel), s.drag_linear, s.drag_quadratic)
+        wrench_B[:, 2, 0] += total
+        wrench_B[:, :, 1] = rotor_wrench[:, 1:]
+        if opt.ground_effect:  # reaction torque follows rotor speed, not the ground-effect thrust gain
+            wrench_B[:, 2, 1] = (s.torque_map[:, 2, :] * f_nom).sum(axis=1)
+        wrench_W = np.matmul(R, wrench_B)
+        F_W, tau_W = wrench_W[:, :, 0], wrench_W[:, :, 1]
+        if opt.downwash:
+            self.downwash_W = downwash_force_W(st.p_W, total, self._wake_radius, self._disk_area, opt.downwash_model)
+            F_W = F_W + self.downwash_W
+        self.force_W, self.torque_W = F_W, tau_W
+        cid, world = self.client_id, p.WORLD_FRAME
+        apply_force, apply_torque = p.applyExternalForce, p.applyExternalTorque
+        for b, F, tau, pos in zip(self._body_list, F_W.tolist(), tau_W.tolist(), st.p_W.tolist(), strict=True):
+            apply_force(b, -1, F, pos, world, cid)
+            apply_torque(b, -1, tau, world, cid)
+
+    def after_step(self, tick: int) -> None:
+        """Run-loop phase 3: read the new state and run the controllers due at ``tick``."""
+        self._tick = tick
+        st = self._read_state()
+        if tick % self._outer_div == 0:
+            vsp = self._shaper.update(st, tick)
+            self._vel_ctrl.freeze = self._tv_ctrl.saturated
+            self._att_sp = self._tv_ctrl.update(self._vel_ctrl.update(vsp, st), st)
+            self._record_tilt_events(tick)
+        wrench = self._rate_ctrl.update(self._att_ctrl.update(self._att_sp, st), st)
+        self._rotors.omega_cmd = self._mixer.update(wrench, st).omega
+
+    def set_command(self, i: int, cmd: FlightCommand) -> None:
+        """Give UAV ``i`` a new command; envelope saturations are recorded as events (see :meth:`pop_events`)."""
+        if not 0 <= i < len(self.body_ids):
+            raise IndexError(f"uav index {i} out of range for a fleet of {len(self.body_ids)}")
+        self._events.extend(self._shaper.set_command(i, cmd, self._state, self._tick))
+
+    def pop_events(self) -> list[dict]:
+        """Events since the last call, oldest first, e.g. ``{"type": "command_saturated", "uav": 0, "tick": 480,
+        "field": "speed", "requested": 25.0, "applied": 20.0, "limit": "max_speed"}``; the list is then cleared."""
+        events, self._events = self._events, []
+        return events
+
+    # ------------------------------------------------------------------ state
+    @property
+    def state(self) -> FleetState:
+        """State after the last physics step (arrays are copies)."""
+        st = self._state
+        return FleetState(p_W=st.p_W.copy(), q_WB=st.q_WB.copy(), R_WB=st.R_WB.copy(), v_W=st.v_W.copy(),
+                          omega_B=st.omega_B.copy(), rotor_speed=self._rotors.omega.copy(), thrust=self._thrust.copy())
+
+    @property
+    def tilt_limit(self) -> np.ndarray:
+        """(N,) largest tilt the controllers command (rad): ``tilt_max - tilt_margin``."""
+        return self._tv_ctrl.tilt_limit
+
+    def _read_state(self) -> FleetState:
+        cid = self.client_id
+        get_pose, get_vel = p.getBasePositionAndOrientation, p.getBaseVelocity
+        ids, flat = self._body_list, chain.from_iterable
+        n = len(ids)
+        pose = np.fromiter(flat(flat(get_pose(i, cid) for i in ids)), float, 7 * n).reshape(n, 7)
+        vel = np.fromiter(flat(flat(get_vel(i, cid) for i in ids)), float, 6 * n).reshape(n, 6)
+        R = quat_to_rotmat(pose[:, 3:])
+        self._state = FleetState(p_W=pose[:, :3], q_WB=pose[:, 3:], R_WB=R, v_W=vel[:, :3],
+                                 omega_B=rotate_T(R, vel[:, 3:]),
+                                 rotor_speed=self._rotors.omega, thrust=self._thrust)
+        return self._state
+
+    def _record_tilt_events(self, tick: int) -> None:
+        sat = self._tv_ctrl.saturated
+        for i in np.flatnonzero(sat & ~self._tilt_saturated).tolist():
+            self._events.append({"type": "command_saturated", "uav": i, "tick": tick, "field": "tilt",
+                                 "requested": float(self._tv_ctrl.requested_tilt[i]),
+                                 "applied": float(self._tv_ctrl.tilt_limit[i]), "limit": "tilt_max"})
+        self._tilt_saturated = sat.copy()

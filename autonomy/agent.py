@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+from autonomy.fusion.track_fusion import TrackFusion
 from autonomy.guidance.setpoints import Setpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.measurement import Detection
@@ -43,10 +44,23 @@ class GuidanceLaw(Protocol):
 
 @dataclass(frozen=True)
 class AgentOutput:
-    """What one agent step produced: the set-point, the estimate it was based on, and how many detections it used."""
+    """What one agent step produced.
+
+    Attributes
+    ----------
+    setpoint : Setpoint
+        For the UAV's controllers.
+    estimate : TargetEstimate | None
+        The estimate guidance used: the fused one when the agent fuses, else the local one.
+    local_estimate : TargetEstimate | None
+        The agent's own estimator output (to share with teammates).
+    used_detections : int
+        Detections absorbed at this step.
+    """
 
     setpoint: Setpoint
     estimate: TargetEstimate | None
+    local_estimate: TargetEstimate | None
     used_detections: int
 
 
@@ -63,14 +77,17 @@ class Agent:
         Guidance law (built-in or a user's class).
     idle : GuidanceLaw | None
         Flown while there is no target estimate (e.g. hold a search point); None hands ``target=None`` to ``guidance``.
+    fusion : TrackFusion | None
+        Fuses the local estimate with teammates' shared estimates for guidance; None = no fusion.
     """
 
     def __init__(self, uav_id: str, estimator: TargetEstimator, guidance: GuidanceLaw,
-                 idle: GuidanceLaw | None = None) -> None:
+                 idle: GuidanceLaw | None = None, fusion: TrackFusion | None = None) -> None:
         self.uav_id = uav_id
         self.estimator = estimator
         self.guidance = guidance
         self.idle = idle
+        self.fusion = fusion
         self._pending: list[Detection] = []
         self.estimate: TargetEstimate | None = None
 
@@ -78,11 +95,14 @@ class Agent:
         """Queue detections; they are used at the first step at or after their arrival time."""
         self._pending.extend(detections)
 
-    def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState]) -> AgentOutput:
-        """Run estimation and guidance at time ``t`` (s)."""
+    def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState],
+             shared: Sequence[TargetEstimate] = ()) -> AgentOutput:
+        """Run estimation, fusion with the teammates' ``shared`` estimates, and guidance at time ``t`` (s)."""
         ready = sorted((d for d in self._pending if d.t_arrival <= t + 1e-9), key=lambda d: d.t_meas)
         self._pending = [d for d in self._pending if d.t_arrival > t + 1e-9]
-        self.estimate = self.estimator.step(t, ready)
+        local = self.estimator.step(t, ready)
+        self.estimate = self.fusion.fuse(t, local, shared) if self.fusion is not None else local
         law = self.idle if self.estimate is None and self.idle is not None else self.guidance
         setpoint = law.command(own, self.estimate, teammates, t)
-        return AgentOutput(setpoint=setpoint, estimate=self.estimate, used_detections=len(ready))
+        return AgentOutput(setpoint=setpoint, estimate=self.estimate, local_estimate=local,
+                           used_detections=len(ready))

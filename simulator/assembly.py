@@ -9,11 +9,12 @@ import numpy as np
 import pybullet as p
 
 from autonomy.agent import Agent
+from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
-from autonomy.guidance.types import OwnState, TeammateState
+from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.camera import CAR_RGBA
 from autonomy.sensing.measurement import Sensor
-from autonomy.sensing.messages import StateMessage
+from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
 from simulator.factories import build_estimator, build_guidance, build_sensor
@@ -65,11 +66,15 @@ class Assembly:
     agents: list[AgentSlot] = field(default_factory=list)
     record_div: int = 12
     latest_estimates: dict[int, Any] = field(default_factory=dict)
+    latest_local: dict[int, Any] = field(default_factory=dict)
     latest_setpoints: dict[int, Any] = field(default_factory=dict)
     world_spec: Any = None
     channel: Any = None
     _outage_ticks: list = field(default_factory=list)
     _heard: dict = field(default_factory=dict)
+    _shared: dict = field(default_factory=dict)
+    _local: dict = field(default_factory=dict)
+    _sharing: bool = False
     event_counts_by_uav: dict = field(default_factory=dict)
     _contacts: set = field(default_factory=set)
 
@@ -85,20 +90,41 @@ class Assembly:
         st = self.quads.state
         return OwnState(t=t, p_W=st.p_W[i], v_W=st.v_W[i], yaw=_yaw(st.q_WB[i]))
 
-    def teammates(self, i: int, t: float, tick: int) -> list[TeammateState]:
-        """What UAV ``i`` knows of its team: the truth with perfect comms, else the last state each one got through."""
+    def inbox(self, i: int, t: float, tick: int) -> tuple[list[TeammateState], list[TargetEstimate]]:
+        """What UAV ``i`` knows of its team: states and shared target estimates.
+
+        Perfect comms: the teammates' true states and their latest local estimates. Radio: the last of each that got
+        through the channel.
+        """
+        shared = self._shared.setdefault(i, {})
         if self.channel is None:
             st = self.quads.state
-            return [TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=_yaw(st.q_WB[j]))
-                    for j in range(len(self.uav_ids)) if j != i]
+            mates = [TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=_yaw(st.q_WB[j]))
+                     for j in range(len(self.uav_ids)) if j != i]
+            estimates = [e for j, e in self._local.items() if j != i and e is not None]
+            return mates, estimates
         known = self._heard.setdefault(i, {})
         for env in self.channel.receive(self.uav_ids[i], tick):
             msg = env.message
+            j = self.uav_ids.index(msg.sender)
             if isinstance(msg, StateMessage):
-                j = self.uav_ids.index(msg.sender)
                 known[j] = TeammateState(id=j, t=msg.t_sent, p_W=msg.p_W, v_W=msg.v_W, yaw=msg.yaw,
                                          plan_p_W=msg.plan_p_W, plan_dt=msg.plan_dt)
-        return [known[j] for j in sorted(known)]
+            elif isinstance(msg, EstimateMessage):
+                n = msg.x.size // 2
+                shared[j] = TargetEstimate(t=msg.t_estimate, p_W=msg.x[:n], v_W=msg.x[n:], P=msg.P)
+        return [known[j] for j in sorted(known)], [shared[j] for j in sorted(shared)]
+
+    def _share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int) -> None:
+        if self.channel is None:
+            self._local[i] = est
+            return
+        if est is None or est.P is None:
+            return
+        st = self.quads.state
+        msg = EstimateMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, target_id=0,
+                              x=np.concatenate([est.p_W, est.v_W]), P=est.P, t_estimate=est.t)
+        self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
 
     def _broadcast_state(self, i: int, t: float, tick: int) -> None:
         st = self.quads.state
@@ -140,9 +166,13 @@ class Assembly:
                 continue
             if self.channel is not None:
                 self._broadcast_state(a.uav, t, tick)
-            result = a.agent.step(t, self.own_state(a.uav, t), self.teammates(a.uav, t, tick))
+            mates, shared = self.inbox(a.uav, t, tick)
+            result = a.agent.step(t, self.own_state(a.uav, t), mates, shared if a.agent.fusion is not None else ())
             self.quads.set_command(a.uav, _to_command(result.setpoint))
+            if self._sharing:
+                self._share_estimate(a.uav, result.local_estimate, t, tick)
             self.latest_estimates[a.uav] = result.estimate
+            self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint
             self._record_agent(tick, t, a.uav, result)
         if self._outage_ticks:
@@ -184,17 +214,9 @@ class Assembly:
                                  z0=z[0], z1=z[1], z2=z[2], z3=z[3])
 
     def _record_agent(self, tick: int, t: float, uav: int, result: Any) -> None:
-        est = result.estimate
-        row = {"tick": tick, "t": t, "uav": uav, "valid": est is not None, "x": np.nan, "y": np.nan,
-               "vx": np.nan, "vy": np.nan, "pxx": np.nan, "pxy": np.nan, "pyy": np.nan, "pvxvx": np.nan,
-               "pvyvy": np.nan, "detections": result.used_detections}
-        if est is not None:
-            row.update(x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0], vy=est.v_W[1])
-            if est.P is not None:
-                n = est.p_W.size
-                row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1], pvxvx=est.P[n, n],
-                           pvyvy=est.P[n + 1, n + 1])
-        self.recorder.append("estimates", **row)
+        self.recorder.append("estimates", **_estimate_row(tick, t, uav, result.local_estimate, result.used_detections))
+        if self.agents[uav].agent.fusion is not None:
+            self.recorder.append("fused_estimates", **_estimate_row(tick, t, uav, result.estimate, 0))
         sp = result.setpoint
         cmd = {"tick": tick, "t": t, "uav": uav, "kind": type(sp).__name__, "speed": np.nan, "heading_rate": np.nan,
                "altitude": np.nan, "vx": np.nan, "vy": np.nan, "vz": np.nan}
@@ -236,6 +258,18 @@ class Assembly:
 
     def close(self) -> None:
         self.scene.close()
+
+
+def _estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used: int) -> dict:
+    row = {"tick": tick, "t": t, "uav": uav, "valid": est is not None, "x": np.nan, "y": np.nan,
+           "vx": np.nan, "vy": np.nan, "pxx": np.nan, "pxy": np.nan, "pyy": np.nan, "pvxvx": np.nan,
+           "pvyvy": np.nan, "detections": used}
+    if est is not None:
+        row.update(x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0], vy=est.v_W[1])
+        if est.P is not None:
+            n = est.p_W.size
+            row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1], pvxvx=est.P[n, n], pvyvy=est.P[n + 1, n + 1])
+    return row
 
 
 def _yaw(q: np.ndarray) -> float:
@@ -294,7 +328,11 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
                                 lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
-        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance),
+        fusion = None
+        if u.autonomy.fusion.method != "none":
+            f = u.autonomy.fusion
+            fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
+        agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents)
 
@@ -348,4 +386,5 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
                     scene_query=query, sensors=prep.sensors, agents=prep.agents, world_spec=world,
                     channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
                     _outage_ticks=outage_ticks,
+                    _sharing=any(a.agent.fusion is not None for a in prep.agents),
                     record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))

@@ -4,8 +4,9 @@
 
 - ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
   failures / fallbacks and solve time p50 / p95 (ms), standoff error (m) and, with several trackers, phase error (deg);
-- ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's estimate against truth — mean Euclidean
-  error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate.
+- ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
+  Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
+  ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ class MetricsTracker:
         self.physics_hz = physics_hz
         self.asm: Any = None
         self.errors: dict[int, _Errors] = defaultdict(_Errors)
+        self.fused_errors: dict[int, _Errors] = defaultdict(_Errors)
         self.min_sep: np.ndarray | None = None
         self.standoff_err: dict[int, list[float]] = defaultdict(list)
         self.phase_err: list[float] = []
@@ -63,12 +65,9 @@ class MetricsTracker:
             k = asm.target_index
             p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
             for i in due:
-                err = self.errors[i]
-                err.steps += 1
-                est = asm.latest_estimates.get(i)
-                if est is not None:
-                    err.pos.append(float(np.linalg.norm(est.p_W[:2] - p_true)))
-                    err.vel.append(float(np.linalg.norm(est.v_W[:2] - v_true)))
+                self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
+                if asm.agents[i].agent.fusion is not None:
+                    self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
             if self.standoffs and asm.quads is not None:
                 q = asm.quads.state.p_W[:, :2]
                 for i in due:
@@ -84,6 +83,13 @@ class MetricsTracker:
             d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
             np.fill_diagonal(d, np.inf)
             self.min_sep = np.minimum(self.min_sep, d.min(axis=1))
+
+    @staticmethod
+    def _error(err: _Errors, est: Any, p_true: np.ndarray, v_true: np.ndarray) -> None:
+        err.steps += 1
+        if est is not None:
+            err.pos.append(float(np.linalg.norm(est.p_W[:2] - p_true)))
+            err.vel.append(float(np.linalg.norm(est.v_W[:2] - v_true)))
 
     def metrics(self, sim_time_s: float, wall_time_s: float, complete: bool) -> dict[str, Any]:
         asm = self.asm
@@ -124,7 +130,9 @@ class MetricsTracker:
                             "delivery_ratio": cs.delivered / cs.sent if cs.sent else None}
         if asm.target_index is not None and self.errors:
             tid = asm.car_ids[asm.target_index]
-            out["targets"] = {tid: {asm.uav_ids[i]: e.summary() for i, e in sorted(self.errors.items())}}
+            per_uav = {asm.uav_ids[i]: e.summary() for i, e in sorted(self.errors.items())}
+            per_uav.update({f"{asm.uav_ids[i]}_fused": e.summary() for i, e in sorted(self.fused_errors.items())})
+            out["targets"] = {tid: per_uav}
         return _finite_or_none(out)
 
 

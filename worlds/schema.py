@@ -279,8 +279,17 @@ class GuidanceSpec(Strict):
         return self
 
 
+class FusionSpec(Strict):
+    """Track-to-track fusion of the teammates' shared estimates (``autonomy.fusion.track_fusion``)."""
+
+    method: Literal["none", "convex", "covariance_intersection"] = "none"
+    max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
+    q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
+
+
 class AutonomySpec(Strict):
     rate_hz: PositiveFloat = Field(10.0, description="agent decision rate, Hz; must divide sim.physics_hz")
+    fusion: FusionSpec = Field(default_factory=FusionSpec)
     estimator: EstimatorSpec = Field(default_factory=EstimatorSpec)
     guidance: GuidanceSpec = Field(default_factory=GuidanceSpec)
 

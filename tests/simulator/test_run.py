@@ -155,3 +155,14 @@ def test_radio_channel_carries_team_state_and_outages(tmp_path):
                                                                       "comms.block_by_buildings=false"])
     ratio = ok.metrics["comms"]["delivered"] / ok.metrics["comms"]["sent"]
     assert 0.62 < ratio < 0.97
+
+
+def test_fused_estimate_beats_the_worse_uav(tmp_path):
+    """Both UAVs fuse: the fused error is below the worse UAV's own error (the better UAV dominates the fusion)."""
+    result = run("demo", duration=20.0, seed=3, out_dir=tmp_path, overrides=[
+        "uavs[0].autonomy.fusion.method=convex", "uavs[1].autonomy.fusion.method=convex"])
+    m = result.metrics["targets"]["car1"]
+    worse = max(m["uav1"]["position_error_mean_m"], m["uav2"]["position_error_mean_m"])
+    assert m["uav1_fused"]["position_error_mean_m"] < worse
+    assert m["uav2_fused"]["position_error_mean_m"] < worse
+    assert "fused_estimates" in result.record.streams

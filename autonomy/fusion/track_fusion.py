@@ -1,0 +1,98 @@
+"""Fusing a UAV's own target estimate with the estimates its teammates shared (paper 002's state-vector fusion, or CI).
+
+Shared estimates arrive late (radio latency, the sender's agent period): each is first predicted to the fusion time with a
+nearly-constant-velocity model, ``p += v·Δt``, ``P ← F P Fᵀ + Q(Δt)`` with white-acceleration density ``q``; estimates
+older than ``max_age_s`` are dropped. The fused estimate is what guidance uses; the local filter is not reset with it
+(no feedback), as in paper 002, so fusing repeatedly does not double-count a teammate's information in its own filter.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
+from autonomy.guidance.types import TargetEstimate
+
+__all__ = ["TrackFusionConfig", "TrackFusion", "predict_estimate"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackFusionConfig:
+    """Track-to-track fusion settings.
+
+    Attributes
+    ----------
+    method : {"convex", "covariance_intersection"}
+        Convex combination ignoring cross-covariance (paper 002), or covariance intersection (consistent for correlated
+        tracks).
+    max_age_s : float
+        Shared estimates older than this are ignored (s), > 0.
+    q : float
+        White-acceleration spectral density used to age shared estimates (m²/s³), >= 0.
+    """
+
+    method: Literal["convex", "covariance_intersection"] = "convex"
+    max_age_s: float = 2.0
+    q: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.method not in ("convex", "covariance_intersection"):
+            raise ValueError(f"TrackFusionConfig.method must be convex|covariance_intersection, got {self.method!r}")
+        if not self.max_age_s > 0:
+            raise ValueError(f"TrackFusionConfig.max_age_s must be > 0 s, got {self.max_age_s}")
+        if not self.q >= 0:
+            raise ValueError(f"TrackFusionConfig.q must be >= 0, got {self.q}")
+
+
+def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
+    """Constant-velocity prediction of a 2-D estimate (state order x, y, vx, vy) to time ``t`` (s)."""
+    dt = t - est.t
+    if dt == 0.0:
+        return est
+    n = est.p_W.size
+    F = np.eye(2 * n)
+    F[:n, n:] = dt * np.eye(n)
+    P = None
+    if est.P is not None:
+        Q = np.zeros((2 * n, 2 * n))
+        Q[:n, :n] = abs(dt) ** 3 / 3 * q * np.eye(n)
+        Q[:n, n:] = Q[n:, :n] = dt ** 2 / 2 * q * np.eye(n)
+        Q[n:, n:] = abs(dt) * q * np.eye(n)
+        P = F @ est.P @ F.T + Q
+    return TargetEstimate(t=t, p_W=est.p_W + dt * est.v_W, v_W=est.v_W, P=P)
+
+
+class TrackFusion:
+    """Fuses the own estimate with teammates' shared estimates at a given time."""
+
+    def __init__(self, config: TrackFusionConfig) -> None:
+        self.config = config
+        self.fusions = 0
+
+    def fuse(self, t: float, own: TargetEstimate | None, shared: Sequence[TargetEstimate]) -> TargetEstimate | None:
+        """The fused estimate at ``t`` (s); the own estimate alone (or the freshest shared one) when nothing else is usable."""
+        cfg = self.config
+        fresh = [predict_estimate(e, t, cfg.q) for e in shared
+                 if e.P is not None and 0.0 <= t - e.t <= cfg.max_age_s]
+        parts = ([predict_estimate(own, t, cfg.q)] if own is not None and own.P is not None else []) + fresh
+        if not parts:
+            return own
+        if len(parts) == 1:
+            return parts[0]
+        xs = [np.concatenate([e.p_W, e.v_W]) for e in parts]
+        Ps = [e.P for e in parts]
+        if cfg.method == "convex":
+            x, P = xs[0], Ps[0]
+            for xb, Pb in zip(xs[1:], Ps[1:]):
+                f = state_vector_fusion(x, P, xb, Pb)
+                x, P = f.x, f.P
+        else:
+            f = covariance_intersection(xs, Ps)
+            x, P = f.x, f.P
+        self.fusions += 1
+        n = parts[0].p_W.size
+        return TargetEstimate(t=t, p_W=x[:n], v_W=x[n:], P=P)

@@ -1,0 +1,56 @@
+"""Track-to-track fusion of shared, aged estimates."""
+
+import numpy as np
+import pytest
+
+from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig, predict_estimate
+from autonomy.guidance.types import TargetEstimate
+
+
+def est(t, p, v, var_p, var_v):
+    return TargetEstimate(t=t, p_W=np.array(p, float), v_W=np.array(v, float),
+                          P=np.diag([var_p, var_p, var_v, var_v]))
+
+
+def test_prediction_is_constant_velocity_with_white_acceleration_noise():
+    e = est(1.0, [10, 20], [2, -1], 4.0, 1.0)
+    out = predict_estimate(e, 3.0, q=0.5)
+    assert np.allclose(out.p_W, [14, 18]) and out.t == 3.0
+    dt = 2.0
+    # per axis: F P Fᵀ + q [[dt³/3, dt²/2], [dt²/2, dt]]
+    assert out.P[0, 0] == pytest.approx(4 + dt ** 2 * 1 + 0.5 * dt ** 3 / 3)
+    assert out.P[0, 2] == pytest.approx(dt * 1 + 0.5 * dt ** 2 / 2)
+    assert out.P[2, 2] == pytest.approx(1 + 0.5 * dt)
+
+
+def test_convex_fusion_of_independent_estimates_is_the_information_weighted_mean():
+    fusion = TrackFusion(TrackFusionConfig(method="convex", q=0.0))
+    a = est(5.0, [0, 0], [1, 0], 1.0, 1.0)
+    b = est(5.0, [3, 0], [1, 0], 2.0, 1.0)
+    f = fusion.fuse(5.0, a, [b])
+    assert f.p_W[0] == pytest.approx(3 * (1 / 2) / (1 + 1 / 2))  # (x_a/σa² + x_b/σb²)/(1/σa² + 1/σb²)
+    assert f.P[0, 0] == pytest.approx(1 / (1 + 1 / 2))
+    assert fusion.fusions == 1
+
+
+def test_stale_or_missing_estimates():
+    fusion = TrackFusion(TrackFusionConfig(max_age_s=1.0))
+    own = est(10.0, [0, 0], [0, 0], 1.0, 1.0)
+    stale = est(8.0, [5, 5], [0, 0], 1.0, 1.0)
+    assert fusion.fuse(10.0, own, [stale]).p_W.tolist() == [0, 0]
+    fresh = est(9.5, [5, 5], [0, 0], 1.0, 1.0)
+    only = fusion.fuse(10.0, None, [fresh])  # no own track yet: the teammate's, aged to now
+    assert only.t == 10.0 and only.P[0, 0] > 1.0
+    assert fusion.fuse(10.0, None, []) is None
+
+
+def test_covariance_intersection_never_claims_more_than_the_best_input():
+    fusion = TrackFusion(TrackFusionConfig(method="covariance_intersection", q=0.0))
+    a = est(0.0, [0, 0], [0, 0], 1.0, 1.0)
+    f = fusion.fuse(0.0, a, [a])  # the same track twice (fully correlated): CI must not halve the covariance
+    assert np.trace(f.P) == pytest.approx(np.trace(a.P), rel=1e-6)
+
+
+def test_config_validation():
+    with pytest.raises(ValueError, match="max_age_s"):
+        TrackFusionConfig(max_age_s=0)

@@ -1,0 +1,1 @@
+"""Road-constrained target estimation: constant-curvature road approximation, MAEKF / ECUKF, junction hypotheses."""

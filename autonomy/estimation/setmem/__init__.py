@@ -1,0 +1,1 @@
+"""Set-membership (bounded-error) search and tracking estimator on unions of polygons."""

@@ -1,0 +1,82 @@
+"""Set-membership search as a per-UAV guidance law (the :class:`~autonomy.guidance.base.Guidance` interface).
+
+Each UAV runs its own :class:`~autonomy.guidance.search.planner.SearchPlanner` on its own sets (read from its
+:class:`~autonomy.estimation.setmem.estimator.SetMembershipEstimator`). The sequential order of the paper is carried
+by the shared plans: a teammate whose ``plan_p_W`` is stamped at the current time ``t`` has already decided in this
+step, so its planned observations are subtracted from the predicted sets; the others are ignored (they decide
+after this UAV). The agent passes only the line-of-sight neighbours as ``teammates``.
+
+The decision ``u`` becomes a world-frame velocity set-point along the new heading ``psi + u`` at the search speed,
+with altitude hold ``v_z = k_z (z_ref - z)``, and the yaw set-point ``psi + u`` (the footprint turns with the yaw).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+from autonomy.estimation.setmem.estimator import SetMembershipEstimator
+from autonomy.guidance.base import Guidance
+from autonomy.guidance.search.planner import PlannedPath, SearchDecision, SearchPlanner
+from autonomy.guidance.setpoints import VelocitySetpoint
+from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+
+__all__ = ["SetMembershipSearchGuidance", "teammate_path"]
+
+_MIN_COURSE_SPEED = 0.5  # m/s below which the body yaw is used as the heading
+
+
+def teammate_path(tm: TeammateState) -> PlannedPath | None:
+    """The planned positions (m) and headings (rad, from successive points) a teammate shares, or ``None``."""
+    if tm.plan_p_W is None:
+        return None
+    pts = np.vstack([tm.p_W[:2], tm.plan_p_W[:, :2]])
+    d = np.diff(pts, axis=0)
+    yaw = np.arctan2(d[:, 1], d[:, 0])
+    return PlannedPath(p_xy=pts[1:], yaw=yaw)
+
+
+class SetMembershipSearchGuidance(Guidance):
+    """Search MPC of one UAV (module docstring).
+
+    Parameters
+    ----------
+    planner : SearchPlanner
+        The one-step MPC.
+    estimator : SetMembershipEstimator
+        This UAV's set-membership estimator (read only).
+    """
+
+    def __init__(self, planner: SearchPlanner, estimator: SetMembershipEstimator):
+        super().__init__()
+        self.planner = planner
+        self.estimator = estimator
+        self.last_decision: SearchDecision | None = None
+
+    def command(self, own: OwnState, target: TargetEstimate | None, teammates: Sequence[TeammateState],
+                t: float) -> VelocitySetpoint:
+        """Velocity set-point for the next step; ``target`` is unused (the sets replace a point estimate)."""
+        cfg = self.planner.config
+        heading = own.course(_MIN_COURSE_SPEED)
+        decided = []
+        for tm in teammates:
+            path = teammate_path(tm)
+            if path is not None and abs(tm.t - t) <= 1e-9:
+                decided.append(path)
+        t0 = time.perf_counter()
+        decision = self.planner.decide(own.p_W[:2], heading, self.estimator.estimate, decided)
+        self.stats.solve_times_s.append(time.perf_counter() - t0)
+        self.stats.iterations.append(len(decision.controls))
+        self.stats.calls += 1
+        self.stats.solves += 1
+        self.stats.last_status = "grid"
+        self.last_decision = decision
+        psi = heading + decision.u
+        vz = cfg.altitude_gain * (cfg.altitude - float(own.p_W[2]))
+        return VelocitySetpoint(v_W=np.array([cfg.speed * np.cos(psi), cfg.speed * np.sin(psi), vz]), yaw=psi)
+
+    def planned_path(self) -> np.ndarray | None:
+        """(h, 2) positions (m) planned by the last command, shared with the teammates."""
+        return None if self.last_decision is None else self.last_decision.path.p_xy.copy()

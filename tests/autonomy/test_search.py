@@ -1,0 +1,185 @@
+"""Set-membership search control: unicycle rollout, cost terms, sequential decisions, guidance, missions."""
+
+import numpy as np
+import pytest
+import shapely
+
+from autonomy.estimation.setmem import polygons as pg
+from autonomy.estimation.setmem.estimator import SetEstimate, SetMembershipConfig, SetMembershipEstimator
+from autonomy.guidance.search.guidance import SetMembershipSearchGuidance, teammate_path
+from autonomy.guidance.search.mission import MissionConfig, SearchMission, line_of_sight_graph
+from autonomy.guidance.search.planner import SearchConfig, SearchPlanner, decision_order, rollout
+from autonomy.guidance.search.regions import PrismViewRegion
+from autonomy.guidance.setpoints import VelocitySetpoint
+from autonomy.guidance.types import OwnState, TeammateState
+from autonomy.sensing.box_sensor import BoxSensor, BoxSensorConfig
+from autonomy.sensing.scene import SensorPose
+from worlds.geometry import Building
+
+AREA = shapely.box(0.0, 0.0, 500.0, 500.0)
+CFG = SearchConfig()
+FOOT = np.sqrt(2) * 100 * np.tan(np.pi / 8)
+
+
+def planner(buildings=(), cfg=CFG):
+    free = AREA if not buildings else shapely.difference(AREA, shapely.union_all(
+        [shapely.Polygon(b.footprint) for b in buildings]))
+    return SearchPlanner(cfg, PrismViewRegion(BoxSensorConfig(), buildings), free, buildings, footprint_radius=FOOT)
+
+
+def test_config_validation():
+    with pytest.raises(ValueError, match="n_controls"):
+        SearchConfig(n_controls=4)
+    with pytest.raises(ValueError, match="alpha_s1 - alpha_s2 >= d_col"):
+        SearchConfig(alpha_s1=6.0, alpha_s2=3.0, d_col=5.0)
+
+
+def test_rollout_holds_the_turn():
+    p = rollout(np.array([0.0, 0.0]), 0.0, np.pi / 2, SearchConfig(speed=10.0, dt=1.0, horizon=2))
+    np.testing.assert_allclose(p.yaw, [np.pi / 2, np.pi])
+    np.testing.assert_allclose(p.p_xy, [[0.0, 10.0], [-10.0, 10.0]], atol=1e-12)
+
+
+def test_decision_order_per_component_breadth_first():
+    A = np.zeros((5, 5), bool)
+    for i, j in [(0, 3), (3, 1), (2, 4)]:
+        A[i, j] = A[j, i] = True
+    assert decision_order(A) == [0, 3, 1, 2, 4]
+
+
+def test_obstacle_risk_shape():
+    b = Building.cuboid((250, 250), (40, 40, 100))
+    pl = planner([b])
+    d = np.array([CFG.alpha_s1, 60.0, CFG.d_col])
+    r = pl.obstacle_risk(np.column_stack([270.0 + d, np.full(3, 250.0)]))
+    assert r[0] == pytest.approx(0.5)
+    assert r[1] < 1e-6
+    assert r[2] == pytest.approx(0.5 * (1 - np.tanh((CFG.d_col - CFG.alpha_s1) / CFG.alpha_s2)))
+    assert r[2] > 0.95
+
+
+def test_turns_towards_the_unexplored_side():
+    """Xbar is the west half only; a UAV flying north on the border turns west (u > 0)."""
+    pl = planner()
+    est = SetEstimate(t=0.0, X=pg.EMPTY, Xbar=shapely.box(0, 0, 230, 500))
+    dec = pl.decide(np.array([260.0, 100.0]), np.pi / 2, est)
+    assert dec.u > 0
+    assert dec.terms["J_s"] == 0.0
+    # mirrored: Xbar on the east half, it turns east
+    est_e = SetEstimate(t=0.0, X=pg.EMPTY, Xbar=shapely.box(290, 0, 500, 500))
+    assert pl.decide(np.array([260.0, 100.0]), np.pi / 2, est_e).u < 0
+
+
+def test_distance_term_pulls_towards_a_remote_set():
+    """Everything near is explored; only a far patch of Xbar remains to the east: the UAV turns towards it."""
+    pl = planner()
+    est = SetEstimate(t=0.0, X=pg.EMPTY, Xbar=shapely.box(450, 200, 480, 230))
+    dec = pl.decide(np.array([100.0, 215.0]), np.pi / 2, est)  # heading north, patch due east
+    assert dec.u < 0
+    assert dec.terms["J_d"] > 0
+
+
+def test_avoids_an_obstacle_ahead():
+    b = Building.cuboid((250, 300), (60, 60, 100))
+    pl = planner([b])
+    est = SetEstimate(t=0.0, X=pg.EMPTY, Xbar=shapely.difference(AREA, shapely.Polygon(b.footprint)))
+    p0 = np.array([250.0, 235.0])  # 35 m south of the wall, heading north at 16.7 m/s
+    dec = pl.decide(p0, np.pi / 2, est)
+    assert dec.u != 0.0
+    assert float(shapely.Polygon(b.footprint).distance(shapely.Point(dec.path.p_xy[-1]))) > CFG.alpha_s1
+
+
+def test_second_uav_accounts_for_the_first():
+    """Two UAVs at the same place: the one deciding second does not pick the region the first will observe."""
+    pl = planner()
+    est = SetEstimate(t=0.0, X=pg.EMPTY, Xbar=AREA)
+    p0 = np.array([250.0, 100.0])
+    first = pl.decide(p0, np.pi / 2, est)
+    second = pl.decide(p0, np.pi / 2, est, [first.path])
+    assert second.u != first.u
+    assert abs(second.u - first.u) >= CFG.max_turn / 2
+    decisions = pl.plan_team(np.array([p0, p0]), np.array([np.pi / 2, np.pi / 2]), [est, est],
+                             np.array([[False, True], [True, False]]))
+    assert decisions[0].u == first.u and decisions[1].u == second.u
+    # unlinked UAVs do not know each other's plans and decide alike
+    alone = pl.plan_team(np.array([p0, p0]), np.array([np.pi / 2, np.pi / 2]), [est, est], np.zeros((2, 2), bool))
+    assert alone[0].u == alone[1].u
+
+
+def test_prism_region_matches_the_sensor():
+    rng = np.random.default_rng(0)
+    bs = [Building.cuboid((200, 200), (40, 60, 100)), Building.cuboid((300, 260), (50, 30, 100), yaw=0.4)]
+    sensor = BoxSensor(BoxSensorConfig(), bs)
+    fast = PrismViewRegion(BoxSensorConfig(), bs)
+    for _ in range(20):
+        p = rng.uniform(150, 350, 2)
+        yaw = rng.uniform(-np.pi, np.pi)
+        pose = SensorPose(p_W=np.array([*p, 100.0]), q_WB=np.array([0, 0, np.sin(yaw / 2), np.cos(yaw / 2)]))
+        exact, approx = sensor.observed_region(pose), fast.observed_region(pose)
+        assert shapely.symmetric_difference(exact, approx).area <= 0.01 * 82.84**2
+
+
+def test_line_of_sight_graph():
+    obst = shapely.box(40, -10, 60, 10)
+    A = line_of_sight_graph(np.array([[0.0, 0.0], [100.0, 0.0], [50.0, 50.0]]), obst)
+    assert not A[0, 1] and A[0, 2] and A[1, 2] and not A[0, 0]
+
+
+def test_guidance_command_and_shared_plan():
+    est = SetMembershipEstimator(SetMembershipConfig(), AREA)
+    pl = planner()
+    g = SetMembershipSearchGuidance(pl, est)
+    own = OwnState(t=3.0, p_W=np.array([250.0, 100.0, 95.0]), v_W=np.array([0.0, 16.0, 0.0]), yaw=np.pi / 2)
+    sp = g.command(own, None, [], 3.0)
+    assert isinstance(sp, VelocitySetpoint)
+    assert np.hypot(*sp.v_W[:2]) == pytest.approx(CFG.speed)
+    assert sp.v_W[2] == pytest.approx(CFG.altitude_gain * 5.0)
+    assert sp.yaw == pytest.approx(np.pi / 2 + g.last_decision.u)
+    plan = g.planned_path()
+    assert plan.shape == (2, 2)
+    # a teammate that already decided this step, at the same place, shares its plan: this UAV picks another turn
+    tm = TeammateState(id=1, t=3.0, p_W=own.p_W, v_W=own.v_W, yaw=own.yaw, plan_p_W=plan)
+    np.testing.assert_allclose(teammate_path(tm).p_xy, plan)
+    g2 = SetMembershipSearchGuidance(pl, est)
+    g2.command(own, None, [tm], 3.0)
+    assert g2.last_decision.u != g.last_decision.u
+    # a stale plan (stamped at an earlier step) is ignored
+    stale = TeammateState(id=1, t=2.0, p_W=own.p_W, v_W=own.v_W, yaw=own.yaw, plan_p_W=plan)
+    g3 = SetMembershipSearchGuidance(pl, est)
+    g3.command(own, None, [stale], 3.0)
+    assert g3.last_decision.u == g.last_decision.u
+    assert g.stats.calls == 1 and len(g.stats.solve_times_s) == 1
+
+
+SMALL = dict(area_size=(250.0, 250.0), n_uavs=3, n_targets=2, n_decoys=2, n_obstacles=2,
+             obstacle_sides=(20.0, 40.0), steps=80)
+
+
+@pytest.fixture(scope="module")
+def mpc_mission():
+    return SearchMission(MissionConfig(control="mpc", **SMALL), np.random.default_rng(0)).run()
+
+
+def test_mission_mpc_shrinks_xbar_keeps_guarantee(mpc_mission):
+    r = mpc_mission
+    assert r.guarantee.all()
+    assert r.collisions(CFG.d_col) == 0
+    xbar = r.area_Xbar.mean(axis=1)
+    assert xbar[0] > 0.7
+    assert xbar[40:].mean() < 0.15  # the team holds the unexplored set below 15 % of the area
+    assert xbar.min() < 0.1
+
+
+def test_mission_mpc_beats_random_turns(mpc_mission):
+    rnd = SearchMission(MissionConfig(control="random", **SMALL), np.random.default_rng(0)).run()
+    assert rnd.guarantee.all()
+    assert mpc_mission.area_Xbar[40:].mean() < 0.6 * rnd.area_Xbar[40:].mean()
+
+
+def test_mission_decoys_taken_then_erased(mpc_mission):
+    """Each decoy that entered X (taken for a target) is later erased by a view from outside its cone."""
+    d = mpc_mission.decoy_in_X
+    assert d.any()
+    for j in np.flatnonzero(d.any(axis=0)):
+        first = int(np.argmax(d[:, j]))
+        assert not d[first:, j].all(), f"decoy {j} never erased after step {first + 1}"

@@ -1,0 +1,190 @@
+"""What the autonomy believes, drawn over a rendered frame with OpenCV from world coordinates.
+
+Every world-space mark (the true and estimated target positions, the estimate's 2σ covariance ellipse, the standoff
+circle, UAV trails, radar detections) is projected with the frame's own :class:`CameraView`, so it lands where the
+3D renderer drew the scene. Lines are drawn with 4 fractional bits (``shift=4``) for sub-pixel placement.
+
+The 2σ ellipse of a position covariance ``P = V diag(l1, l2) V^T`` is
+``x + 2 V diag(sqrt(l1), sqrt(l2)) [cos a, sin a]``; for a Gaussian it holds 1 - exp(-2) ≈ 86 % of the
+probability mass in 2D.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from simulator.render.projection import CameraView
+from simulator.render.timeline import RadarScan
+
+__all__ = ["LEGEND", "EstimateMark", "OverlayFrame", "covariance_ellipse", "draw_hud", "draw_overlays", "rgb255"]
+
+_SHIFT = 4
+_ONE = 1 << _SHIFT
+_LIMIT = 1e5  # px: keeps far off-screen points inside cv2's fixed-point range
+_TRUTH_RGB = (255, 255, 255)
+_CLUTTER_RGB = (255, 230, 0)
+_CIRCLE_POINTS = 72
+
+
+def rgb255(rgb: Sequence[float]) -> tuple[int, int, int]:
+    """An RGB colour in [0, 1] as 0–255 integers."""
+    return tuple(int(round(255 * c)) for c in rgb[:3])
+
+
+def covariance_ellipse(xy: np.ndarray, P: np.ndarray, n_sigma: float = 2.0, n: int = _CIRCLE_POINTS) -> np.ndarray:
+    """Points (n, 2) m of the ``n_sigma`` ellipse of the 2x2 covariance ``P`` (m²) around ``xy``."""
+    lam, V = np.linalg.eigh(0.5 * (P + P.T))
+    a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return xy + n_sigma * (np.c_[np.cos(a), np.sin(a)] * np.sqrt(np.clip(lam, 0.0, None))) @ V.T
+
+
+@dataclass(frozen=True)
+class EstimateMark:
+    """One UAV's belief about the target: its colour (RGB in [0, 1]), position xy m, covariance P (2, 2) m²,
+    standoff radius m (None: no circle)."""
+
+    uav: int
+    rgb: tuple[float, float, float]
+    xy: np.ndarray
+    P: np.ndarray
+    standoff_m: float | None
+
+
+@dataclass(frozen=True)
+class OverlayFrame:
+    """The world-space marks of one frame.
+
+    ``target_W`` is the true target (3,) m; ``trails`` (colour, points (K, 3) m) per UAV; ``scan_rgb`` the colour of
+    each UAV's detections; ``uavs`` (colour, name, p_W (3,) m) ringed and labelled; ``ground_z`` the height (m) at
+    which the 2D estimates, ellipses and standoff circles are drawn.
+    """
+
+    target_W: np.ndarray | None
+    estimates: list[EstimateMark] = field(default_factory=list)
+    trails: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
+    scans: list[RadarScan] = field(default_factory=list)
+    scan_rgb: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    uavs: list[tuple[tuple[float, float, float], str, np.ndarray]] = field(default_factory=list)
+    ground_z: float = 0.0
+
+
+def _pixels(view: CameraView, pts_W: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    uv, front = view.project(pts_W, w, h)
+    return np.clip(np.nan_to_num(uv * _ONE), -_LIMIT * _ONE, _LIMIT * _ONE).astype(np.int64), front
+
+
+def _polyline(img: np.ndarray, view: CameraView, pts_W: np.ndarray, rgb: tuple[int, int, int], thickness: int,
+              closed: bool) -> None:
+    h, w = img.shape[:2]
+    if closed:
+        pts_W = np.vstack([pts_W, pts_W[:1]])
+    px, front = _pixels(view, pts_W, w, h)
+    # split into runs of consecutive points in front of the camera
+    runs, start = [], None
+    for k, ok in enumerate(front):
+        if ok and start is None:
+            start = k
+        if (not ok or k == len(front) - 1) and start is not None:
+            end = k + 1 if ok else k
+            if end - start >= 2:
+                runs.append(px[start:end].astype(np.int32).reshape(-1, 1, 2))
+            start = None
+    if runs:
+        cv2.polylines(img, runs, False, rgb, thickness, cv2.LINE_AA, _SHIFT)
+
+
+def _at_ground(xy: np.ndarray, z: float) -> np.ndarray:
+    xy = np.atleast_2d(xy)
+    return np.c_[xy, np.full(len(xy), z)]
+
+
+def _circle_W(centre: np.ndarray, radius: float) -> np.ndarray:
+    a = np.linspace(0.0, 2.0 * np.pi, _CIRCLE_POINTS, endpoint=False)
+    return centre + radius * np.c_[np.cos(a), np.sin(a)]
+
+
+def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame) -> None:
+    """Draw ``frame``'s marks on ``img`` (H, W, 3) RGB uint8 in place, as seen through ``view``."""
+    h, w = img.shape[:2]
+    s = max(1, int(round(h / 360)))  # line scale for the image size
+    for rgb, pts in frame.trails:
+        if len(pts) >= 2:
+            _polyline(img, view, pts, rgb255(rgb), s, closed=False)
+    for est in frame.estimates:
+        col = rgb255(est.rgb)
+        if est.standoff_m is not None:
+            _polyline(img, view, _at_ground(_circle_W(est.xy, est.standoff_m), frame.ground_z), col, s, closed=True)
+        ell = covariance_ellipse(est.xy, est.P)
+        _polyline(img, view, _at_ground(ell, frame.ground_z), col, s + 1, closed=True)
+        px, front = _pixels(view, _at_ground(est.xy, frame.ground_z), w, h)
+        if front[0]:
+            c = tuple(int(v) for v in px[0])
+            d = 4 * s * _ONE
+            cv2.line(img, (c[0] - d, c[1] - d), (c[0] + d, c[1] + d), col, s, cv2.LINE_AA, _SHIFT)
+            cv2.line(img, (c[0] - d, c[1] + d), (c[0] + d, c[1] - d), col, s, cv2.LINE_AA, _SHIFT)
+    for scan in frame.scans:
+        px, front = _pixels(view, scan.points_W, w, h)
+        col = rgb255(frame.scan_rgb.get(scan.uav, (1.0, 1.0, 1.0)))
+        for k in np.flatnonzero(front):
+            c = tuple(int(v) for v in px[k])
+            if scan.clutter[k]:
+                cv2.circle(img, c, 3 * s * _ONE, _CLUTTER_RGB, s, cv2.LINE_AA, _SHIFT)
+            else:
+                cv2.circle(img, c, 2 * s * _ONE, col, -1, cv2.LINE_AA, _SHIFT)
+                cv2.circle(img, c, 2 * s * _ONE, (0, 0, 0), 1, cv2.LINE_AA, _SHIFT)
+    for rgb, name, p_W in frame.uavs:
+        px, front = _pixels(view, p_W, w, h)
+        if front[0]:
+            c = tuple(int(v) for v in px[0])
+            cv2.circle(img, c, 7 * s * _ONE, rgb255(rgb), s, cv2.LINE_AA, _SHIFT)
+            org = (c[0] // _ONE + 8 * s, c[1] // _ONE - 4 * s)
+            cv2.putText(img, name, org, cv2.FONT_HERSHEY_SIMPLEX, 0.35 * s, rgb255(rgb), max(1, s // 2), cv2.LINE_AA)
+    if frame.target_W is not None:
+        _brackets(img, view, frame.target_W, s)
+
+
+def _brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int) -> None:
+    """Corner brackets around the true target, leaving the car itself visible."""
+    h, w = img.shape[:2]
+    px, front = _pixels(view, p_W, w, h)
+    if not front[0]:
+        return
+    cx, cy = (int(v) for v in px[0])
+    r, k = 11 * s * _ONE, 5 * s * _ONE
+    for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        corner = (cx + sx * r, cy + sy * r)
+        for end in ((corner[0] - sx * k, corner[1]), (corner[0], corner[1] - sy * k)):
+            cv2.line(img, corner, end, (0, 0, 0), 3 * s, cv2.LINE_AA, _SHIFT)
+            cv2.line(img, corner, end, _TRUTH_RGB, s, cv2.LINE_AA, _SHIFT)
+
+
+LEGEND = (("white brackets: true target   x: estimate   ellipse around it: 2-sigma   wide circle: standoff",
+           (0.9, 0.9, 0.9)),
+          ("filled dots: radar detections of the last scan   yellow rings: clutter   lines: UAV trails",
+           (0.9, 0.9, 0.9)))
+
+
+def draw_hud(img: np.ndarray, lines: Sequence[tuple[str, tuple[float, float, float]]], corner: str = "left",
+             size: float = 1.0) -> None:
+    """Text lines (text, RGB in [0, 1]) on a translucent dark box in the top-left (``corner="left"``) or
+    bottom-left (``"bottom"``) corner, in place; ``size`` scales the text."""
+    if not lines:
+        return
+    h, w = img.shape[:2]
+    scale = 0.5 * h / 720 * 1.3 * size
+    thick = max(1, int(round(h / 720 * 1.5 * size)))
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    sizes = [cv2.getTextSize(text, font, scale, thick)[0] for text, _ in lines]
+    line_h = int(max(sz[1] for sz in sizes) * 1.8)
+    pad = line_h // 2
+    box_w = min(w, max(sz[0] for sz in sizes) + 2 * pad)
+    box_h = min(h, line_h * len(lines) + pad)
+    y0 = 0 if corner == "left" else h - box_h
+    roi = img[y0:y0 + box_h, 0:box_w]
+    roi[:] = (roi.astype(np.uint16) * 2 // 5).astype(np.uint8)  # darken to 40 %
+    for k, (text, rgb) in enumerate(lines):
+        cv2.putText(img, text, (pad, y0 + (k + 1) * line_h), font, scale, rgb255(rgb), thick, cv2.LINE_AA)

@@ -1,0 +1,337 @@
+"""Replaying a recorded run directory as an MP4 video: ``render_run(run_dir, RenderConfig(...)) -> Path``.
+
+Per video frame (at ``fps``, not at the physics rate): interpolate the recorded truth to the frame time, pose the
+stage's bodies, move each panel's camera, render, scale to the panel size, draw the overlays and encode. A ``split``
+frame is a chase view (left half) beside a top-down map (right half); every other layout is one panel.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Iterator
+import logging
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import yaml
+from tqdm import tqdm
+
+from simulator.render.cameras import CameraInputs, CameraRig, ChaseCamera, OnboardCamera, OrbitCamera, TopDownCamera
+from simulator.render.config import RenderConfig
+from simulator.render.encode import VideoEncoder
+from simulator.render.overlays import LEGEND, EstimateMark, OverlayFrame, draw_hud, draw_overlays
+from simulator.render.projection import CameraView
+from simulator.render.stage import UAV_COLORS, Stage, load_geometry
+from simulator.render.timeline import Timeline
+from simulator.runrecord import load_run
+
+__all__ = ["Panel", "RenderedFrame", "Replayer", "render_run"]
+
+log = logging.getLogger(__name__)
+
+_STANDOFF_GUIDANCE = ("vector_field", "nmpc", "plugin")
+_DEFAULT_CAR = (4.77, 1.83, 1.47)  # m, the sedan's body (vehicles/cars/sedan.py)
+_DEFAULT_ARM = 0.25  # m, a 500 mm-class quadrotor (vehicles/airframes/survey_quad.py)
+_TOPDOWN_MARGIN = 0.08  # fraction of the framed area added on each side
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One camera's part of a frame: the view, and the panel's left edge and size in the frame, pixels."""
+
+    name: str
+    view: CameraView
+    x0: int
+    width: int
+    height: int
+    seg: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class RenderedFrame:
+    """A finished frame (H, W, 3) RGB uint8 at time ``t`` s and its panels."""
+
+    t: float
+    rgb: np.ndarray
+    panels: list[Panel]
+
+
+def _world_dict(run_dir: Path) -> dict[str, Any]:
+    """The resolved world of a run directory as a plain mapping (validated through the loader when it can be)."""
+    path = run_dir / "world.yaml"
+    if not path.exists():
+        return {}
+    try:
+        from worlds.loader import load_world
+
+        return dict(load_world(path).raw)
+    except Exception as exc:  # noqa: BLE001 - an older or newer schema must not stop a replay
+        warnings.warn(f"{path} does not validate against the current schema ({exc}); reading it as plain YAML",
+                      stacklevel=3)
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        return data if isinstance(data, dict) else {}
+
+
+def _car_size(kind: str) -> tuple[float, float, float]:
+    try:
+        params = importlib.import_module(f"vehicles.cars.{kind}").PARAMS
+        return float(params.length), float(params.width), float(params.height)
+    except (ImportError, AttributeError):
+        return _DEFAULT_CAR
+
+
+def _arm_length(airframe: str | None) -> float:
+    """Rotor arm length of the named airframe, m (that of a 500 mm-class frame if it cannot be loaded)."""
+    try:
+        from vehicles.quadrotor.airframes import load_airframe
+
+        return float(load_airframe(str(airframe)).arm_length)
+    except Exception:  # noqa: BLE001 - an unknown or renamed airframe only changes how big the UAVs are drawn
+        return _DEFAULT_ARM
+
+
+class Replayer:
+    """Renders frames of a recorded run.
+
+    Parameters
+    ----------
+    run_dir : Path
+        A run directory (complete or partial) with a ``uav_truth`` stream. Without vehicles the cameras look at the
+        ground below the fleet's centre.
+    config : RenderConfig
+        Size, camera, renderer, overlays.
+    """
+
+    def __init__(self, run_dir: Path, config: RenderConfig) -> None:
+        self.run_dir = Path(run_dir)
+        self.config = cfg = config
+        rec = load_run(self.run_dir)
+        self.metrics = rec.metrics
+        world_name, seed = rec.run.get("world"), rec.run.get("seed")
+        self.title = f"{world_name} (seed {seed})" if world_name is not None else self.run_dir.name
+        self.timeline = tl = Timeline(rec.streams)
+        world = _world_dict(self.run_dir)
+        uavs = world.get("uavs") or []
+        self.uav_index = sorted(tl.uavs)
+        self.vehicle_index = sorted(tl.vehicles)
+        self.uav_names = {u: (uavs[u].get("id") if u < len(uavs) else None) or f"uav{u}" for u in self.uav_index}
+        self.standoff: dict[int, float | None] = {}
+        for u in self.uav_index:
+            g = (uavs[u].get("autonomy") or {}).get("guidance") or {} if u < len(uavs) else {}
+            ok = g.get("type") in _STANDOFF_GUIDANCE and g.get("standoff_m") is not None
+            self.standoff[u] = float(g["standoff_m"]) if ok else None
+        target = cfg.target if cfg.target is not None else int(rec.metrics.get("target_index") or 0)
+        self.target: int | None = target if target in tl.vehicles else (self.vehicle_index or [None])[0]
+        if cfg.uav not in tl.uavs:
+            raise ValueError(f"RenderConfig.uav = {cfg.uav}: the run has UAVs {self.uav_index}")
+        gv = world.get("ground_vehicles") or []
+        sizes = [cfg.car_size or _car_size(str(gv[v].get("type", "sedan")) if v < len(gv) else "sedan")
+                 for v in self.vehicle_index]
+        self.geometry = load_geometry(self.run_dir / "geometry.npz")
+        self.uav_span = 2.0 * _arm_length(uavs[0].get("airframe") if uavs else None) * cfg.uav_scale  # tip to tip, m
+        self._sizes = sizes
+        self.layout = self._layout()
+        self.stage = self._choose_stage()
+
+    # -- layout and renderer -----------------------------------------------------------------------------------
+
+    def _layout(self) -> list[tuple[str, int, int]]:
+        w = self.config.width
+        if self.config.camera == "split":
+            return [("chase", 0, w // 2), ("topdown", w // 2, w - w // 2)]
+        return [(self.config.camera, 0, w)]
+
+    def _rig(self, name: str, aspect: float) -> CameraRig:
+        cfg = self.config
+        if name == "chase":
+            return ChaseCamera(cfg.chase_vfov, cfg.smoothing_s, cfg.chase_back_m, cfg.chase_up_m)
+        if name == "orbit":
+            return OrbitCamera(cfg.vfov, cfg.smoothing_s, cfg.orbit_radius_m, cfg.orbit_height_m, cfg.orbit_period_s)
+        if name == "onboard":
+            return OnboardCamera(cfg.vfov, cfg.smoothing_s, cfg.onboard_pitch, 0.75 * self.uav_span, cfg.onboard_track)
+        return TopDownCamera(np.deg2rad(40.0), cfg.smoothing_s, aspect,
+                             None if cfg.topdown_follow else self._area(), cfg.topdown_span_m)
+
+    def _area(self) -> tuple[float, float, float, float]:
+        xy = [np.c_[tr.p_W[:, 0], tr.p_W[:, 1]] for tr in (*self.timeline.uavs.values(),
+                                                           *self.timeline.vehicles.values())]
+        b = self.geometry.bounds()
+        if b is not None:
+            xy.append(np.array([[b[0], b[2]], [b[1], b[3]]]))
+        pts = np.concatenate(xy)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        m = _TOPDOWN_MARGIN * max(hi - lo)
+        return float(lo[0] - m), float(hi[0] + m), float(lo[1] - m), float(hi[1] + m)
+
+    def _new_stage(self, egl: bool) -> Stage:
+        return Stage(self.geometry, len(self.uav_index), self._sizes, self.uav_span, use_egl=egl)
+
+    def _choose_stage(self) -> Stage:
+        want = self.config.renderer
+        if want == "tiny":
+            return self._new_stage(False)
+        egl = self._new_stage(True)
+        if not egl.egl:
+            egl.close()
+            warnings.warn("the EGL renderer is not usable here: rendering with TinyRenderer (slower on GPUs)",
+                          stacklevel=3)
+            return self._new_stage(False)
+        if want == "egl":
+            return egl
+        tiny = self._new_stage(False)
+        t0 = self.frame_times()[0]
+        cost = {}
+        for stage in (tiny, egl):
+            self.stage = stage
+            self._pose(t0)
+            name, _, pw = self.layout[0]
+            view = self._rig(name, pw / self.config.height).view(self._inputs(t0), 0.0)
+            w, h = self._render_size(pw)
+            cost[stage] = stage.time_render(view, w, h)
+        best = min(cost, key=cost.get)
+        (egl if best is tiny else tiny).close()
+        other = egl if best is tiny else tiny
+        log.info("renderer: %s (%.0f ms/frame) over %s (%.0f ms)", best.renderer_name, 1e3 * cost[best],
+                 other.renderer_name, 1e3 * cost[other])
+        return best
+
+    # -- frames ------------------------------------------------------------------------------------------------
+
+    def frame_times(self) -> np.ndarray:
+        """Times of the video frames, s: every 1/fps from the start to the end of the record (or of the config)."""
+        tl, cfg = self.timeline, self.config
+        t0 = max(cfg.t_start, tl.t_start)
+        t1 = tl.t_end if cfg.t_end is None else min(cfg.t_end, tl.t_end)
+        n = max(1, int(np.floor((t1 - t0) * cfg.fps + 1e-6)))
+        return t0 + np.arange(n) / cfg.fps
+
+    def _render_size(self, panel_w: int) -> tuple[int, int]:
+        s = self.config.render_scale
+        return max(8, int(round(panel_w * s))), max(8, int(round(self.config.height * s)))
+
+    def _pose(self, t: float) -> None:
+        tl = self.timeline
+        self.stage.set_poses([tl.uavs[u].at(t) for u in self.uav_index], [tl.vehicles[v].at(t) for v in
+                                                                          self.vehicle_index])
+
+    def _inputs(self, t: float) -> CameraInputs:
+        p_u, q_u = self.timeline.uavs[self.config.uav].at(t)
+        return CameraInputs(t=t, p_uav_W=p_u, q_uav_WB=q_u, p_target_W=self._target_at(t))
+
+    def _target_at(self, t: float) -> np.ndarray:
+        """The target's true position at ``t`` s, or the ground below the fleet's centre when there is none, m."""
+        if self.target is not None:
+            return self.timeline.vehicles[self.target].at(t)[0]
+        c = np.mean([self.timeline.uavs[u].at(t)[0] for u in self.uav_index], axis=0)
+        return np.array([c[0], c[1], 0.0])
+
+    def overlay_frame(self, t: float) -> OverlayFrame:
+        """The marks to draw at time ``t`` s."""
+        tl, cfg = self.timeline, self.config
+        p_t = self._target_at(t)
+        marks = []
+        for u, est in sorted(tl.estimates.items()):
+            got = est.at(t)
+            if got is not None:
+                marks.append(EstimateMark(u, UAV_COLORS[u % len(UAV_COLORS)], got[0], got[1], self.standoff.get(u)))
+        trails = [(UAV_COLORS[u % len(UAV_COLORS)], tl.uavs[u].trail(t, cfg.trail_s)) for u in self.uav_index]
+        return OverlayFrame(target_W=p_t if self.target is not None else None, estimates=marks, trails=trails,
+                            scans=tl.radar_scans(t),
+                            scan_rgb={u: UAV_COLORS[u % len(UAV_COLORS)] for u in self.uav_index},
+                            uavs=[(UAV_COLORS[u % len(UAV_COLORS)], self.uav_names[u], tl.uavs[u].at(t)[0])
+                                  for u in self.uav_index],
+                            ground_z=float(p_t[2]))
+
+    def hud_lines(self, t: float) -> list[tuple[str, tuple[float, float, float]]]:
+        """HUD text: the time, then per UAV its estimate's position error and 2σ, and its solver time if recorded."""
+        tl = self.timeline
+        p_t = self._target_at(t)
+        lines = [(f"{self.title}  t = {t:6.2f} s", (1.0, 1.0, 1.0))]
+        per_uav = self.metrics.get("uavs") or {}
+        for u in self.uav_index:
+            name = self.uav_names[u]
+            got = tl.estimates[u].at(t) if u in tl.estimates else None
+            text = f"{name}: no estimate"
+            if got is not None and self.target is None:
+                text = f"{name}: estimate at ({got[0][0]:.0f}, {got[0][1]:.0f}) m"
+            elif got is not None:
+                err = float(np.hypot(*(got[0] - p_t[:2])))
+                two_sigma = 2.0 * float(np.sqrt(max(np.trace(got[1]), 0.0)))
+                text = f"{name}: error {err:5.1f} m  2sigma {two_sigma:5.1f} m"
+            solve = (per_uav.get(name) or {}).get("solve_ms_p50")
+            if solve is not None:
+                text += f"  solve {float(solve):.1f} ms"
+            lines.append((text, UAV_COLORS[u % len(UAV_COLORS)]))
+        return lines
+
+    def render_frames(self, segmentation: bool = False, start: int = 0,
+                      stop: int | None = None) -> Iterator[RenderedFrame]:
+        """Yield a :class:`RenderedFrame` per video frame ``start <= k < stop`` (a generator).
+
+        The cameras move smoothly from the first frame on: frames before ``start`` advance them without being
+        rendered, so any range of frames comes out exactly as in one pass over the whole video.
+        """
+        cfg = self.config
+        rigs = [self._rig(name, pw / cfg.height) for name, _, pw in self.layout]
+        times = self.frame_times()
+        stop = len(times) if stop is None else min(stop, len(times))
+        prev = None
+        for k, t in enumerate(times[:stop]):
+            dt = 0.0 if prev is None else float(t - prev)
+            prev = t
+            views = [rig.view(self._inputs(float(t)), dt) for rig in rigs]
+            if k >= start:
+                yield self._frame(float(t), views, segmentation)
+
+    def _frame(self, t: float, views: list[CameraView], segmentation: bool) -> RenderedFrame:
+        cfg = self.config
+        self._pose(t)
+        marks = self.overlay_frame(t) if cfg.overlays else None
+        out = np.empty((cfg.height, cfg.width, 3), dtype=np.uint8)
+        panels = []
+        for (name, x0, pw), view in zip(self.layout, views, strict=True):
+            rw, rh = self._render_size(pw)
+            rgb, seg = self.stage.render(view, rw, rh, segmentation=segmentation, aspect=pw / cfg.height)
+            if (rw, rh) != (pw, cfg.height):
+                rgb = cv2.resize(rgb, (pw, cfg.height), interpolation=cv2.INTER_LINEAR)
+                if seg is not None:
+                    seg = cv2.resize(seg.astype(np.int32), (pw, cfg.height), interpolation=cv2.INTER_NEAREST)
+            if marks is not None:
+                draw_overlays(rgb, view, marks)
+            out[:, x0:x0 + pw] = rgb
+            panels.append(Panel(name, view, x0, pw, cfg.height, seg))
+        if cfg.overlays:
+            draw_hud(out, self.hud_lines(t))
+            if cfg.legend:
+                draw_hud(out, LEGEND, corner="bottom", size=0.7)
+            for pnl in panels[1:]:
+                cv2.line(out, (pnl.x0, 0), (pnl.x0, cfg.height - 1), (20, 20, 20), 2)
+        return RenderedFrame(t=t, rgb=out, panels=panels)
+
+    def close(self) -> None:
+        self.stage.close()
+
+
+def render_run(run_dir: Path, config: RenderConfig) -> Path:
+    """Render the run directory ``run_dir`` to an MP4 video as ``config`` says; returns the video's path.
+
+    Raises
+    ------
+    FileNotFoundError
+        No run directory at ``run_dir``.
+    ValueError
+        The record has no ``uav_truth`` samples, or ``config.uav`` is not one of its UAVs.
+    """
+    from simulator.render.parallel import iter_frames
+
+    run_dir = Path(run_dir)
+    out = Path(config.out) if config.out is not None else run_dir / "video.mp4"
+    n, frames = iter_frames(run_dir, config)
+    with VideoEncoder(out, config.width, config.height, config.fps, config.crf, config.preset) as enc:
+        for rgb in tqdm(frames, total=n, unit="frame", desc=f"render {out.name}", disable=not config.progress):
+            enc.write(rgb)
+    return out

@@ -1,4 +1,4 @@
-"""The ``skytrack`` command: run worlds, list them, run benchmarks.
+"""The ``skytrack`` command: run worlds, list them, run benchmarks and Monte Carlo campaigns.
 
 Exit codes: 0 success; 1 a run or benchmark failed; 2 bad input (invalid world, bad flag); 130 interrupted (Ctrl-C).
 """
@@ -100,6 +100,10 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--only", type=re.compile, default=None, metavar="REGEX", help="only benchmarks whose names match")
     b.add_argument("--json", action="store_true", help="print a JSON list of records")
     b.set_defaults(fn=_bench)
+
+    from simulator.campaign.cli import add_campaign_parser
+
+    add_campaign_parser(sub)
     return ap
 
 

@@ -37,8 +37,10 @@ def check_world(world: World) -> list[WorldIssue]:
                                                   f"(e.g. {_divisors_text(hz)})"))
 
     rate("sim.record_hz", world.sim.record_hz)
-    if world.render.enabled:
-        rate("render.fps", world.render.fps)
+    # render.fps needs no divisor check: the video is replayed from the record, interpolated to each frame's time
+    if world.uavs and world.render.uav >= len(world.uavs):
+        issues.append(WorldIssue("render.uav", world.render.uav,
+                                 f"the index of one of the world's {len(world.uavs)} UAVs (0 .. {len(world.uavs) - 1})"))
     for i, uav in enumerate(world.uavs):
         rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
         rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)

@@ -330,11 +330,15 @@ class CommsSection(Strict):
 
 
 class RenderSection(Strict):
-    enabled: bool = False
-    width: int = Field(1280, gt=0)
-    height: int = Field(720, gt=0)
-    fps: int = Field(30, gt=0)
-    camera: Literal["chase", "orbit", "top_down", "onboard", "split"] = "top_down"
+    """Video of the run, rendered off-screen after it from its record (``simulator.render``)."""
+
+    enabled: bool = Field(False, description="write video.mp4 into the run directory after the run")
+    width: int = Field(1280, ge=16, multiple_of=2, description="frame width, pixels (even: H.264 with yuv420p)")
+    height: int = Field(720, ge=16, multiple_of=2, description="frame height, pixels (even)")
+    fps: int = Field(30, gt=0, le=240, description="video frame rate, Hz")
+    camera: Literal["chase", "orbit", "topdown", "onboard", "split"] = Field(
+        "split", description="split = chase view beside a top-down map")
+    uav: int = Field(0, ge=0, description="index of the UAV the chase and onboard cameras ride with")
 
 
 class DecoySpec(Strict):

@@ -104,6 +104,10 @@ def _parser() -> argparse.ArgumentParser:
     from simulator.campaign.cli import add_campaign_parser
 
     add_campaign_parser(sub)
+
+    from simulator.reproduce.cli import add_reproduce_parser
+
+    add_reproduce_parser(sub)
     return ap
 
 

@@ -1,0 +1,187 @@
+"""What a paper's reproduction produces, and how it becomes ``report.md``.
+
+A reproduction module ``simulator/reproduce/paper_NNN.py`` defines ``reproduce(ctx: ReproContext) -> PaperReport``. It
+runs its experiments (campaigns of worlds, or the autonomy's closed loops), writes its figures into ``ctx.out_dir`` and
+returns the tables (the paper's numbers beside ours, with confidence intervals and run counts), the figures and one
+:class:`Finding` per claim of the paper. :func:`write_paper_report` turns that into ``ctx.out_dir / "report.md"``.
+
+Every number in a report comes from the run of the command that wrote it; nothing is copied in by hand except the
+paper's own figures, which are quoted as the paper prints them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from scipy import stats
+
+from simulator.record import atomic_write_text
+
+__all__ = ["Verdict", "Finding", "Table", "Figure", "PaperReport", "ReproContext", "MeanCI", "mean_ci",
+           "write_paper_report", "paper_markdown"]
+
+Verdict = Literal["reproduced", "not reproduced", "not comparable"]
+VERDICTS: tuple[str, ...] = ("reproduced", "not reproduced", "not comparable")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeanCI:
+    """Mean of ``n`` values and the half-width of its 95 % Student-t confidence interval (None for n < 2)."""
+
+    mean: float
+    half: float | None
+    n: int
+
+    def text(self, digits: int = 3) -> str:
+        """``mean ± half`` with ``digits`` significant digits (``mean`` alone when the interval is undefined)."""
+        if not math.isfinite(self.mean):
+            return "–"
+        m = f"{self.mean:.{digits}g}"
+        return m if self.half is None else f"{m} ± {self.half:.2g}"
+
+
+def mean_ci(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -> MeanCI:
+    """Mean and Student-t confidence half-width of the finite entries of ``values``."""
+    x = np.asarray(values, dtype=float).ravel()
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return MeanCI(mean=float("nan"), half=None, n=0)
+    half = None
+    if x.size >= 2:
+        half = float(stats.t.ppf(0.5 + confidence / 2.0, df=x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
+    return MeanCI(mean=float(x.mean()), half=half, n=int(x.size))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Finding:
+    """One claim of the paper and what our runs say of it.
+
+    Attributes
+    ----------
+    claim : str
+        The paper's claim, in one sentence.
+    verdict : {"reproduced", "not reproduced", "not comparable"}
+        Decided by the reproduction code from the measured numbers, never set by hand.
+    why : str
+        The measured numbers behind the verdict, and for "not comparable" the reason.
+    """
+
+    claim: str
+    verdict: Verdict
+    why: str
+
+    def __post_init__(self) -> None:
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"Finding.verdict must be one of {VERDICTS}, got {self.verdict!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Table:
+    """A table of the paper next to ours: already formatted cells, one header row."""
+
+    title: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        for r in self.rows:
+            if len(r) != len(self.columns):
+                raise ValueError(f"table {self.title!r}: row {r!r} has {len(r)} cells for {len(self.columns)} columns")
+
+    def markdown(self) -> str:
+        esc = lambda c: str(c).replace("|", "\\|")  # noqa: E731
+        lines = ["| " + " | ".join(esc(c) for c in self.columns) + " |",
+                 "|" + "---|" * len(self.columns)]
+        lines += ["| " + " | ".join(esc(c) for c in r) + " |" for r in self.rows]
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Figure:
+    """A PNG written into the paper's output folder (``path`` relative to it) and its caption."""
+
+    path: str
+    caption: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReproContext:
+    """Where and how much to reproduce.
+
+    Attributes
+    ----------
+    out_dir : Path
+        This paper's output folder (created by the caller).
+    runs : int
+        Monte Carlo runs per configuration, >= 1.
+    workers : int | None
+        Worker processes for campaigns (None: all cores).
+    seed : int
+        Base seed: configuration ``k`` of a paper draws its runs' seeds from it.
+    progress : bool
+        Show progress bars.
+    quick : bool
+        Shortened experiments (fewer steps) for smoke tests; the report says so.
+    """
+
+    out_dir: Path
+    runs: int
+    workers: int | None = None
+    seed: int = 1
+    progress: bool = True
+    quick: bool = False
+
+    def __post_init__(self) -> None:
+        if self.runs < 1:
+            raise ValueError(f"ReproContext.runs must be >= 1, got {self.runs}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PaperReport:
+    """A paper's reproduction: what was run, the tables, the figures and the verdicts."""
+
+    paper: str
+    title: str
+    runs: int
+    setup: str
+    tables: tuple[Table, ...] = ()
+    figures: tuple[Figure, ...] = ()
+    findings: tuple[Finding, ...] = ()
+    deviations: tuple[str, ...] = ()
+    wall_time_s: float = float("nan")
+    quick: bool = False
+    extra: dict = field(default_factory=dict)
+
+
+def paper_markdown(rep: PaperReport, command: str) -> str:
+    """The Markdown text of ``report.md`` for one paper."""
+    md = [f"# Reproduction of paper {rep.paper}: {rep.title}", "",
+          f"Generated by `{command}` ({rep.runs} run{'s' if rep.runs != 1 else ''} per configuration"
+          + (f", {rep.wall_time_s:.0f} s wall time" if math.isfinite(rep.wall_time_s) else "") + ")."
+          + (" **Quick mode: shortened experiments, not a reproduction.**" if rep.quick else ""), "",
+          "## Set-up", "", rep.setup.strip(), ""]
+    if rep.deviations:
+        md += ["## Deviations from the paper", "", *(f"- {d}" for d in rep.deviations), ""]
+    md += ["## Findings", "", "| claim | verdict | evidence |", "|---|---|---|"]
+    md += [f"| {f.claim} | **{f.verdict}** | {f.why} |" for f in rep.findings]
+    md.append("")
+    for t in rep.tables:
+        md += [f"## {t.title}", "", t.markdown(), ""]
+        if t.note:
+            md += [t.note, ""]
+    for fig in rep.figures:
+        md += [f"![{fig.caption}]({fig.path})", "", f"*{fig.caption}*", ""]
+    return "\n".join(md)
+
+
+def write_paper_report(rep: PaperReport, out_dir: Path, command: str) -> Path:
+    """Write ``out_dir / "report.md"``; returns its path."""
+    path = Path(out_dir) / "report.md"
+    atomic_write_text(path, paper_markdown(rep, command))
+    return path

@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/skytrack run demo --out runs/demo
+	$(BIN)/skytrack run demo --out runs/demo --video
 
 test: $(STAMP)
 	$(BIN)/python -m pytest $(PYTEST_ARGS)

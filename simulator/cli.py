@@ -12,6 +12,8 @@ import signal
 import sys
 from pathlib import Path
 
+from simulator.render.cli import add_video_arguments
+from simulator.stdio import stdout_to_fd
 from worlds.errors import WorldError
 
 __all__ = ["main"]
@@ -26,13 +28,43 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("runs") / loaded.world.name
     opts = RunOptions(duration_s=args.duration, seed=args.seed, out_dir=out, progress=not args.quiet,
                       plots=not args.no_plots)
+    video = _video_config(args, loaded, out)  # flag errors surface before the run, not after it
     result = run_world(loaded, opts)
     _print_summary(result.metrics, out)
     if result.error:
         print(f"skytrack: run failed: {result.error} (traceback in {out / 'events.jsonl'})", file=sys.stderr)
     if result.status == "interrupted":
         return 130
+    if video is not None:  # a failed run's partial record still makes a video of what happened up to the failure
+        from simulator.render.replay import render_run
+
+        try:
+            print(f"video: {render_run(out, video)}")
+        except Exception as exc:  # noqa: BLE001 - the run record stays valid; the failure is reported
+            print(f"skytrack: rendering the video failed: {exc}", file=sys.stderr)
+            return 1
     return 0 if result.status == "completed" else 1
+
+
+def _video_config(args: argparse.Namespace, loaded: object, out: Path) -> object | None:
+    """The video settings of a run: ``--video [FILE]`` or the world's ``render.enabled``; None for no video."""
+    from simulator.render.cli import render_config_from_args
+
+    world_render = loaded.world.render
+    if args.video is None and not world_render.enabled:
+        return None
+    path = out / "video.mp4" if args.video in (None, "") else Path(args.video)
+    try:
+        cfg = render_config_from_args(args, path, world_render)
+    except ValueError as exc:
+        raise _BadFlag(str(exc)) from None
+    if cfg.uav >= len(loaded.world.uavs):
+        raise _BadFlag(f"--uav {cfg.uav}: the world has {len(loaded.world.uavs)} UAV(s)")
+    return cfg
+
+
+class _BadFlag(ValueError):
+    """A command-line flag with a bad value (exit code 2, nothing run)."""
 
 
 def _print_summary(metrics: dict, out: Path) -> None:
@@ -64,7 +96,11 @@ def _worlds(args: argparse.Namespace) -> int:
 def _bench(args: argparse.Namespace) -> int:
     from simulator.bench.runner import run_benchmarks
 
-    records, failures = run_benchmarks(args.only, progress=not args.json)
+    if args.json:  # PyBullet's C code prints to file descriptor 1: keep stdout for the JSON alone
+        with stdout_to_fd(2):
+            records, failures = run_benchmarks(args.only, progress=False)
+    else:
+        records, failures = run_benchmarks(args.only, progress=True)
     if args.json:
         print(json.dumps([r.to_json() for r in records], indent=2))
     else:
@@ -91,6 +127,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="override a world value, e.g. --set uavs[0].autonomy.guidance.standoff_m=150 (repeatable)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--video", nargs="?", const="", default=None, metavar="FILE",
+                   help="render an MP4 after the run (default FILE: <out>/video.mp4); also on with render.enabled")
+    add_video_arguments(r)
     r.set_defaults(fn=_run)
 
     w = sub.add_parser("worlds", help="list the shipped worlds")
@@ -100,6 +139,10 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--only", type=re.compile, default=None, metavar="REGEX", help="only benchmarks whose names match")
     b.add_argument("--json", action="store_true", help="print a JSON list of records")
     b.set_defaults(fn=_bench)
+
+    from simulator.render.cli import add_render_parser
+
+    add_render_parser(sub)
 
     from simulator.campaign.cli import add_campaign_parser
 
@@ -120,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     try:
         return args.fn(args)
-    except WorldError as exc:
+    except (WorldError, _BadFlag) as exc:
         print(f"skytrack: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

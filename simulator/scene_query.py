@@ -24,6 +24,7 @@ import numpy as np
 import pybullet as p
 
 from autonomy.sensing.scene import CameraIntrinsics, CameraPose, RenderedImage
+from simulator.stdio import quiet_c_stdout
 
 __all__ = ["PybulletSceneQuery", "try_load_egl"]
 
@@ -65,10 +66,11 @@ def try_load_egl(client_id: int, probe_timeout_s: float = 60.0) -> bool:
         if probe.returncode != 0:
             return False
         loader = pkgutil.get_loader("eglRenderer")
-        if loader is not None:
-            plugin = p.loadPlugin(loader.get_filename(), "_eglRendererPlugin", physicsClientId=client_id)
-        else:
-            plugin = p.loadPlugin("eglRendererPlugin", physicsClientId=client_id)
+        with quiet_c_stdout():  # the plugin prints its GL banner on descriptor 1
+            if loader is not None:
+                plugin = p.loadPlugin(loader.get_filename(), "_eglRendererPlugin", physicsClientId=client_id)
+            else:
+                plugin = p.loadPlugin("eglRendererPlugin", physicsClientId=client_id)
     except Exception:  # noqa: BLE001 - any failure means no EGL
         return False
     return plugin >= 0

@@ -158,7 +158,7 @@ def _get(raw: Any, loc: tuple) -> Any:
 def _pydantic_issues(err: ValidationError, raw: dict, lines: dict[tuple, int]) -> list[WorldIssue]:
     issues = []
     for e in err.errors(include_url=False):
-        loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p in _UNION_TAGS))
+        loc = _strip_union_tags(tuple(e["loc"]))
         etype = e["type"]
         if etype == "extra_forbidden":
             expected = "no such key here (unknown keys are errors; check the spelling)"
@@ -174,6 +174,17 @@ def _pydantic_issues(err: ValidationError, raw: dict, lines: dict[tuple, int]) -
 
 
 _UNION_TAGS = {"radar", "camera", "bearing", "box"}
+"""Discriminator tags pydantic inserts after a sensor's list index: ``uavs.0.sensors.1.radar.rate_hz``."""
+
+
+def _strip_union_tags(loc: tuple) -> tuple:
+    """``loc`` without the sensor-union tags (only right after ``sensors[i]``: ``render.camera`` is a real key)."""
+    out: list = []
+    for part in loc:
+        if part in _UNION_TAGS and len(out) >= 2 and isinstance(out[-1], int) and out[-2] == "sensors":
+            continue
+        out.append(part)
+    return tuple(out)
 
 
 def _expected_text(msg: str) -> str:

@@ -28,6 +28,7 @@ from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
 from simulator.render.timeline import Timeline
 from simulator.runrecord import load_run
+from simulator.stdio import quiet_c_stdout
 
 __all__ = ["Panel", "RenderedFrame", "Replayer", "render_run"]
 
@@ -330,8 +331,12 @@ def render_run(run_dir: Path, config: RenderConfig) -> Path:
 
     run_dir = Path(run_dir)
     out = Path(config.out) if config.out is not None else run_dir / "video.mp4"
-    n, frames = iter_frames(run_dir, config)
-    with VideoEncoder(out, config.width, config.height, config.fps, config.crf, config.preset) as enc:
-        for rgb in tqdm(frames, total=n, unit="frame", desc=f"render {out.name}", disable=not config.progress):
-            enc.write(rgb)
+    with quiet_c_stdout():  # the EGL plugin prints GL banners on descriptor 1 while it renders and closes
+        n, frames = iter_frames(run_dir, config)
+        try:
+            with VideoEncoder(out, config.width, config.height, config.fps, config.crf, config.preset) as enc:
+                for rgb in tqdm(frames, total=n, unit="frame", desc=f"render {out.name}", disable=not config.progress):
+                    enc.write(rgb)
+        finally:
+            frames.close()  # closes the PyBullet clients inside the quiet block
     return out

@@ -117,3 +117,18 @@ def test_key_path_parsing():
 def test_every_shipped_world_validates(name):
     loaded = load_world(name)
     assert loaded.world.sim.duration_s > 0
+
+
+def test_a_key_named_like_a_sensor_type_keeps_its_path(tmp_path):
+    """``render.camera`` is a key, not the sensor-union tag ``camera`` that pydantic puts after ``sensors[i]``."""
+    from worlds.errors import WorldError
+    from worlds.loader import load_world
+
+    path = tmp_path / "w.yaml"
+    path.write_text("render:\n  camera: fisheye\nuavs:\n  - id: a\n    initial: {position: [0, 0, 10]}\n"
+                    "    sensors:\n      - {type: camera, rate_hz: -5}\n")
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    text = str(info.value)
+    assert "render.camera = 'fisheye'" in text
+    assert "uavs[0].sensors[0].rate_hz = -5" in text

@@ -74,10 +74,16 @@ def _print_summary(metrics: dict, out: Path) -> None:
     for k, v in rows:
         text = f"{v:.4g}" if isinstance(v, float) else str(v)
         print(f"  {k:<{width}}  {text}")
+    def shown(vals: dict) -> str:
+        return ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in vals.items()
+                         if not isinstance(v, dict))
+
     for section in ("uavs", "targets"):
         for name, vals in (metrics.get(section) or {}).items():
-            shown = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in vals.items())
-            print(f"  {section[:-1]} {name}: {shown}")
+            print(f"  {section[:-1]} {name}: {shown(vals)}".rstrip(": "))
+            for sub, inner in vals.items():
+                if isinstance(inner, dict):
+                    print(f"    {sub}: {shown(inner)}")
 
 
 def _worlds(args: argparse.Namespace) -> int:

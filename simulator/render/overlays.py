@@ -19,6 +19,7 @@ import numpy as np
 
 from simulator.render.projection import CameraView
 from simulator.render.timeline import RadarScan
+from simulator.render.world_marks import probability_rgb
 
 __all__ = ["LEGEND", "EstimateMark", "OverlayFrame", "covariance_ellipse", "draw_hud", "draw_overlays", "rgb255"]
 
@@ -60,7 +61,8 @@ class OverlayFrame:
 
     ``target_W`` is the true target (3,) m; ``trails`` (colour, points (K, 3) m) per UAV; ``scan_rgb`` the colour of
     each UAV's detections; ``uavs`` (colour, name, p_W (3,) m) ringed and labelled; ``ground_z`` the height (m) at
-    which the 2D estimates, ellipses and standoff circles are drawn.
+    which the 2D estimates, ellipses and standoff circles are drawn; ``regards`` (colour, closed ground outline
+    (K, 3) m) the radars' fields of regard; ``links`` (p_a, p_b, delivery probability) the radio links.
     """
 
     target_W: np.ndarray | None
@@ -70,6 +72,8 @@ class OverlayFrame:
     scan_rgb: dict[int, tuple[float, float, float]] = field(default_factory=dict)
     uavs: list[tuple[tuple[float, float, float], str, np.ndarray]] = field(default_factory=list)
     ground_z: float = 0.0
+    regards: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
+    links: list[tuple[np.ndarray, np.ndarray, float]] = field(default_factory=list)
 
 
 def _pixels(view: CameraView, pts_W: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
@@ -111,6 +115,10 @@ def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame) -> Non
     """Draw ``frame``'s marks on ``img`` (H, W, 3) RGB uint8 in place, as seen through ``view``."""
     h, w = img.shape[:2]
     s = max(1, int(round(h / 360)))  # line scale for the image size
+    for rgb, pts in frame.regards:
+        _polyline(img, view, pts, rgb255(tuple(0.55 * c + 0.45 for c in rgb)), 1, closed=True)
+    for a_W, b_W, pr in frame.links:
+        _polyline(img, view, np.vstack([a_W, b_W]), rgb255(probability_rgb(pr)), s, closed=False)
     for rgb, pts in frame.trails:
         if len(pts) >= 2:
             _polyline(img, view, pts, rgb255(rgb), s, closed=False)
@@ -165,6 +173,8 @@ def _brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int) -> Non
 LEGEND = (("white brackets: true target   x: estimate   ellipse around it: 2-sigma   wide circle: standoff",
            (0.9, 0.9, 0.9)),
           ("filled dots: radar detections of the last scan   yellow rings: clutter   lines: UAV trails",
+           (0.9, 0.9, 0.9)),
+          ("pale outline: radar field of regard   UAV-to-UAV line: radio link, red (Pr 0) to green (Pr 1)",
            (0.9, 0.9, 0.9)))
 
 

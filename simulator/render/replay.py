@@ -27,6 +27,7 @@ from simulator.render.overlays import LEGEND, EstimateMark, OverlayFrame, draw_h
 from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
 from simulator.render.timeline import Timeline
+from simulator.render.world_marks import RadioLinks, radar_regards
 from simulator.runrecord import load_run
 from simulator.stdio import quiet_c_stdout
 
@@ -137,6 +138,19 @@ class Replayer:
         self._sizes = sizes
         self.layout = self._layout()
         self.stage = self._choose_stage()
+        self.regards = radar_regards(world)
+        self.links = self._radio_links()
+
+    def _radio_links(self) -> RadioLinks | None:
+        """The run's radio model on the stage's buildings, or None (perfect radio, or a world that does not load)."""
+        try:
+            from worlds.loader import load_world
+
+            links = RadioLinks(load_world(self.run_dir / "world.yaml").world, self.geometry.buildings)
+        except Exception as exc:  # noqa: BLE001 - links are a decoration: a replay must not fail for them
+            log.info("no radio links drawn: %s", exc)
+            return None
+        return links if links.active else None
 
     # -- layout and renderer -----------------------------------------------------------------------------------
 
@@ -245,7 +259,22 @@ class Replayer:
                             scan_rgb={u: UAV_COLORS[u % len(UAV_COLORS)] for u in self.uav_index},
                             uavs=[(UAV_COLORS[u % len(UAV_COLORS)], self.uav_names[u], tl.uavs[u].at(t)[0])
                                   for u in self.uav_index],
-                            ground_z=float(p_t[2]))
+                            ground_z=float(p_t[2]), regards=self._regard_marks(t, float(p_t[2])),
+                            links=self._link_marks(t))
+
+    def _regard_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
+        marks = []
+        for r in self.regards:
+            if r.uav in self.timeline.uavs:
+                p, q = self.timeline.uavs[r.uav].at(t)
+                yaw = float(np.arctan2(2.0 * (q[3] * q[2] + q[0] * q[1]), 1.0 - 2.0 * (q[1] ** 2 + q[2] ** 2)))
+                marks.append((UAV_COLORS[r.uav % len(UAV_COLORS)], r.outline(p, yaw, z)))
+        return marks
+
+    def _link_marks(self, t: float) -> list[tuple[np.ndarray, np.ndarray, float]]:
+        if self.links is None or len(self.uav_index) != len(self.links.names):
+            return []
+        return self.links.at(t, [self.timeline.uavs[u].at(t)[0] for u in self.uav_index])
 
     def hud_lines(self, t: float) -> list[tuple[str, tuple[float, float, float]]]:
         """HUD text: the time, then per UAV its estimate's position error and 2σ, and its solver time if recorded."""

@@ -2,7 +2,10 @@
 
 - ``plots/trajectories.png``: top-down map — buildings, roads, UAV tracks, the target's true path and the estimates;
 - ``plots/errors.png``: each UAV's position error against truth over time, with the filter's own 2σ bound;
-- ``plots/altitude.png``: UAV altitudes over time.
+- ``plots/altitude.png``: UAV altitudes over time;
+- ``plots/standoff.png``: with standoff guidance, each UAV's standoff-distance error and the team's phase-keeping error
+  over time (paper 002's Table III quantities, :mod:`autonomy.metrics.standoff`);
+- ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model.
 """
 
 from __future__ import annotations
@@ -124,7 +127,107 @@ def write_plots(run_dir: str | Path) -> list[Path]:
         written.append(plots / "altitude.png")
         fig.savefig(written[-1])
         plt.close(fig)
+    world = _world(run_dir)
+    for draw in (_standoff_plot, _links_plot):
+        path = draw(plt, rec, world, plots)
+        if path is not None:
+            written.append(path)
     return written
+
+
+def _world(run_dir: Path) -> object | None:
+    """The run's validated world, or None when ``world.yaml`` is missing or from another schema version."""
+    try:
+        from worlds.loader import load_world
+
+        return load_world(run_dir / "world.yaml").world
+    except Exception:  # noqa: BLE001 - plots that need the world are skipped
+        return None
+
+
+def _uav_xy_on(ut: dict[str, np.ndarray], uavs: list[int], t: np.ndarray) -> np.ndarray:
+    """(T, N, 2) positions of ``uavs`` interpolated to times ``t``."""
+    cols = []
+    for u in uavs:
+        d = _by(ut, "uav", u)
+        cols.append(np.c_[np.interp(t, d["t"], d["x"]), np.interp(t, d["t"], d["y"])])
+    return np.stack(cols, axis=1)
+
+
+def _standoff_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) -> Path | None:
+    from autonomy.metrics.standoff import phase_errors, standoff_errors
+
+    if world is None or "uav_truth" not in rec.streams or "vehicle_truth" not in rec.streams:
+        return None
+    trackers = [i for i, u in enumerate(world.uavs) if u.autonomy.guidance.type in ("vector_field", "nmpc")]
+    ut = rec.streams["uav_truth"]
+    trackers = [i for i in trackers if np.any(ut["uav"] == i)]
+    truth = _by(rec.streams["vehicle_truth"], "vehicle", int(rec.metrics.get("target_index", 0) or 0))
+    if not trackers or truth["t"].size < 2:
+        return None
+    t = truth["t"]
+    xy = _uav_xy_on(ut, trackers, t)
+    target = np.c_[truth["x"], truth["y"]]
+    radii = np.array([world.uavs[i].autonomy.guidance.standoff_m for i in trackers])
+    err = standoff_errors(xy, target, radii)
+    two = len(trackers) >= 2
+    fig, axes = plt.subplots(2 if two else 1, 1, figsize=(9, 5.5 if two else 3), dpi=110, sharex=True, squeeze=False)
+    ax = axes[0, 0]
+    for k, i in enumerate(trackers):
+        ax.plot(t, err[:, k], color=_COLORS[i % len(_COLORS)], lw=1.1,
+                label=f"UAV {i} (r_d = {radii[k]:g} m, mean {err[:, k].mean():.1f} m)")
+    ax.set_ylabel("standoff error (m)")
+    ax.set_title("standoff distance error |‖p − p_T‖ − r_d| (truth)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    if two:
+        ph = np.degrees(phase_errors(xy, target))
+        ax = axes[1, 0]
+        ax.plot(t, ph, color="k", lw=1.1, label=f"mean {ph.mean():.1f}°")
+        ax.set_ylabel("phase error (deg)")
+        ax.set_title(f"phase-keeping error (commanded separation {360 / len(trackers):.0f}°)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.tight_layout()
+    path = plots / "standoff.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) -> Path | None:
+    if world is None or world.comms.model == "perfect" or len(world.uavs) < 2 or "uav_truth" not in rec.streams:
+        return None
+    from simulator.render.stage import load_geometry
+    from simulator.render.world_marks import RadioLinks
+
+    geo = plots.parent / "geometry.npz"
+    links = RadioLinks(world, load_geometry(geo).buildings if geo.exists() else [])
+    ut = rec.streams["uav_truth"]
+    uavs = list(range(len(world.uavs)))
+    if not all(np.any(ut["uav"] == u) for u in uavs):
+        return None
+    t = np.unique(ut["t"])
+    z = np.stack([np.interp(t, _by(ut, "uav", u)["t"], _by(ut, "uav", u)["z"]) for u in uavs], axis=1)
+    pos = np.concatenate([_uav_xy_on(ut, uavs, t), z[..., None]], axis=2)
+    pr = np.array([[link[2] for link in links.at(float(tk), list(pos[k]))] for k, tk in enumerate(t)])
+    names = [u.id for u in world.uavs]
+    pairs = [(i, j) for i in uavs for j in uavs if i < j]
+    fig, ax = plt.subplots(figsize=(9, 3.2), dpi=110)
+    for k, (i, j) in enumerate(pairs):
+        ax.plot(t, pr[:, k], lw=1.1, label=f"{names[i]}–{names[j]} (mean {pr[:, k].mean():.2f})")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("delivery probability")
+    ax.set_title("radio links: delivery probability of the channel model at the flown geometry")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = plots / "links.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
 
 
 def _draw_tracks(ax: object, rec: RunRecord) -> None:

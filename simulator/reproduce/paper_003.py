@@ -1,0 +1,233 @@
+"""Reproduction of paper 003 (Yang & Wang 2019): FIM-optimal formation with IMM bearings-only tracking.
+
+Runs the kinematic closed loop :mod:`autonomy.guidance.formation.closed_loop` for the paper's four cases, with the
+FIM-optimal formation (Algorithm 1 + Jacobi PD control) and two formations that are not optimised (the start geometry
+held, and a fan trailing the target), ``ctx.runs`` seeded runs each. The paper has no tables: its claims are
+qualitative (error levels per case, growth at manoeuvres until the IMM switches) and it never compares against a
+non-optimal formation, which the notes ask us to do.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+import numpy as np
+
+from autonomy.guidance.formation.closed_loop import CASES, FormationLoopConfig, FormationLoopResult, run_formation_loop
+from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
+
+__all__ = ["reproduce"]
+
+FORMATIONS = ("optimal", "fixed", "trail")
+SETTLE_S = 5.0  # steady-state window starts here, s
+PAPER_LEVEL = {1: "≈ 5", 2: "≈ 10", 3: "≈ 10", 4: "grows at each manoeuvre"}
+
+
+def _one(args: tuple[int, str, int, bool]) -> FormationLoopResult:
+    case, formation, seed, quick = args
+    cfg = FormationLoopConfig(case=case, formation=formation, max_duration=6.0 if quick else None)
+    return run_formation_loop(cfg, np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(case,))))
+
+
+def _run_all(ctx: ReproContext) -> dict[tuple[int, str], list[FormationLoopResult]]:
+    jobs = [(case, form, ctx.seed * 100_003 + r, ctx.quick) for case in CASES for form in FORMATIONS
+            for r in range(ctx.runs)]
+    workers = ctx.workers or os.cpu_count() or 1
+    if workers == 1 or ctx.quick:
+        results = [_one(j) for j in jobs]
+    else:
+        with cf.ProcessPoolExecutor(workers) as pool:
+            results = list(pool.map(_one, jobs, chunksize=4))
+    out: dict[tuple[int, str], list[FormationLoopResult]] = {}
+    for (case, form, _, _), res in zip(jobs, results, strict=True):
+        out.setdefault((case, form), []).append(res)
+    return out
+
+
+def _steady(res: FormationLoopResult, what: np.ndarray) -> float:
+    ok = res.t >= min(SETTLE_S, res.t[-1] / 2)
+    return float(np.mean(what[ok]))
+
+
+def _turn_response(res: FormationLoopResult, dt: float) -> list[dict[str, float]]:
+    """Per turn of case 4: error before, peak after the onset, at the turn's end, and the IMM's switching delay."""
+    out, t0 = [], 0.0
+    for seg in CASES[4]:
+        t1 = t0 + seg.duration
+        if seg.omega != 0.0 and t1 <= res.t[-1] + 1e-9:
+            mode = 1 if seg.omega > 0 else 2
+            before = (res.t > t0 - 2.0) & (res.t <= t0)
+            early = (res.t > t0) & (res.t <= t0 + 3.0)
+            late = (res.t > t1 - 3.0) & (res.t <= t1)
+            inside = (res.t > t0) & (res.t <= t1)
+            switched = np.flatnonzero(res.mode_probability[inside, mode] > 0.5)
+            out.append({"before": float(res.error[before].mean()), "peak": float(res.error[early].max()),
+                        "end": float(res.error[late].mean()),
+                        "delay": float(res.t[inside][switched[0]] - t0) if switched.size else float("nan")})
+        t0 = t1
+    return out
+
+
+def _figures(ctx: ReproContext, runs: dict[tuple[int, str], list[FormationLoopResult]]) -> list[Figure]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colors = {"optimal": "tab:blue", "fixed": "tab:orange", "trail": "tab:red"}
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), dpi=100, sharex=False)
+    for ax, case in zip(axes.ravel(), CASES, strict=True):
+        for form in FORMATIONS:
+            res = runs[(case, form)]
+            n = min(len(r.error) for r in res)
+            e = np.array([r.error[:n] for r in res])
+            t = res[0].t[:n]
+            ax.plot(t, e.mean(axis=0), color=colors[form], lw=1.2, label=form)
+            if len(res) > 1:
+                ax.fill_between(t, np.percentile(e, 10, axis=0), np.percentile(e, 90, axis=0), color=colors[form],
+                                alpha=0.15, lw=0)
+        ax.set_title(f"case {case}")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("position error (m)")
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"IMM position error, mean and 10–90 % band over {len(runs[(1, 'optimal')])} runs")
+    fig.tight_layout()
+    fig.savefig(ctx.out_dir / "errors.png")
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6), dpi=100)
+    for ax, form in zip(axes[:2], ("optimal", "trail"), strict=True):
+        r = runs[(4, form)][0]
+        ax.plot(r.truth[:, 0], r.truth[:, 2], "k-", lw=1.5, label="target")
+        for i in range(r.agents.shape[1]):
+            ax.plot(r.agents[:, i, 0], r.agents[:, i, 1], lw=1.0, label=f"agent {i + 1}")
+        ax.set_aspect("equal")
+        ax.set_title(f"case 4, {form} formation")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    r = runs[(4, "optimal")][0]
+    for j, name in enumerate(("CV", "CT +", "CT −")):
+        axes[2].plot(r.t, r.mode_probability[:, j], label=name)
+    axes[2].set_title("case 4: IMM mode probabilities (optimal formation)")
+    axes[2].set_xlabel("time (s)")
+    axes[2].legend(fontsize=8)
+    axes[2].grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(ctx.out_dir / "case4.png")
+    plt.close(fig)
+    return [Figure(path="errors.png", caption="Position error over time per case and formation (paper's Figs. 4–7)"),
+            Figure(path="case4.png", caption="Case 4 trajectories for the optimal and the trailing formation, and "
+                                             "the IMM's mode probabilities")]
+
+
+def reproduce(ctx: ReproContext) -> PaperReport:
+    """Run paper 003's cases and compare; see the module docstring."""
+    runs = _run_all(ctx)
+    base = FormationLoopConfig()
+    err = {k: [_steady(r, r.error) for r in v] for k, v in runs.items()}
+    gap = {k: [_steady(r, r.max_log_det_fim - r.log_det_fim) for r in v] for k, v in runs.items()}
+
+    rows = []
+    for case in CASES:
+        diff = mean_ci(np.array(err[(case, "optimal")]) - np.array(err[(case, "trail")]))
+        rows.append((str(case), PAPER_LEVEL[case], *(mean_ci(err[(case, f)]).text() for f in FORMATIONS),
+                     diff.text()))
+    t_err = Table(title="Steady-state position error (m), mean over t ≥ 5 s",
+                  columns=("case", "paper (m)", "optimal", "fixed", "trail", "optimal − trail (paired)"),
+                  rows=tuple(rows),
+                  note=f"Mean ± 95 % CI over {ctx.runs} runs per cell. The paper's levels are read off its "
+                       "figures, with a noise it does not define: not comparable in absolute terms.")
+    t_gap = Table(title="Geometry quality: ln(det F bound) − ln det F over t ≥ 5 s (0 = optimal)",
+                  columns=("case", *FORMATIONS),
+                  rows=tuple((str(c), *(mean_ci(gap[(c, f)]).text() for f in FORMATIONS)) for c in CASES))
+
+    turns = [_turn_response(r, base.dt) for r in runs[(4, "optimal")]]
+    turn_rows, turn_ok = [], True
+    n_turns = min((len(t) for t in turns), default=0)
+    for j in range(n_turns):
+        vals = {k: [t[j][k] for t in turns] for k in ("before", "peak", "end", "delay")}
+        before, peak, end = (mean_ci(vals[k]) for k in ("before", "peak", "end"))
+        delay = mean_ci(vals["delay"])
+        turn_rows.append((f"turn {j + 1}", before.text(), peak.text(), end.text(), delay.text()))
+        switched = np.isfinite(vals["delay"]).mean() >= 0.8
+        turn_ok &= bool(peak.mean > 1.2 * before.mean and end.mean < peak.mean and switched)
+    t_turn = Table(title="Case 4, optimal formation: error around the manoeuvres (m) and IMM switching delay (s)",
+                   columns=("manoeuvre", "error before (last 2 s)", "peak (first 3 s)", "end of turn (last 3 s)",
+                            "delay until μ_CT > 0.5"),
+                   rows=tuple(turn_rows))
+
+    findings = []
+    worse = [c for c in CASES if mean_ci(np.array(err[(c, "optimal")]) - np.array(err[(c, "trail")])).mean >= 0]
+    ci_hi = [mean_ci(np.array(err[(c, "optimal")]) - np.array(err[(c, "trail")])) for c in CASES]
+    sig = all(d.half is not None and d.mean + d.half < 0 for d in ci_hi)
+    findings.append(Finding(
+        claim="The FIM-optimal formation tracks better than a non-optimal one (the comparison the paper omits)",
+        verdict="reproduced" if not worse and (sig or ctx.runs < 2) else "not reproduced",
+        why="optimal − trail paired error difference per case: "
+            + ", ".join(f"case {c}: {d.text()} m" for c, d in zip(CASES, ci_hi, strict=True))
+            + ("; every interval below 0" if sig else "; not every interval below 0")))
+    vs_fixed = [mean_ci(np.array(err[(c, "optimal")]) - np.array(err[(c, "fixed")])) for c in CASES]
+    better = [c for c, d in zip(CASES, vs_fixed, strict=True) if d.half is not None and d.mean + d.half < 0]
+    findings.append(Finding(
+        claim="The FIM-optimal formation also beats the start geometry held fixed",
+        verdict="reproduced" if len(better) == len(CASES) else "not reproduced",
+        why="optimal − fixed paired error difference: "
+            + ", ".join(f"case {c}: {d.text()} m" for c, d in zip(CASES, vs_fixed, strict=True))
+            + f"; significantly better in cases {better or 'none'}. The start geometry is already within "
+              f"{mean_ci(gap[(1, 'fixed')]).mean:.2f} of the ln det F bound (table below), so in straight-line "
+              "cases the optimum buys little and the optimal team's manoeuvring costs some of it back"))
+    gaps_ok = all(mean_ci(gap[(c, "optimal")]).mean < min(mean_ci(gap[(c, f)]).mean for f in ("fixed", "trail"))
+                  for c in CASES)
+    findings.append(Finding(
+        claim="Algorithm 1 drives the team to the det F bound (maximal information geometry)",
+        verdict="reproduced" if gaps_ok else "not reproduced",
+        why="steady ln-det gap to the bound, optimal: "
+            + ", ".join(f"case {c} {mean_ci(gap[(c, 'optimal')]).text(2)}" for c in CASES)
+            + "; the baselines stay further from it (table below); the remaining gap in cases 3–4 is the lag of "
+              "the PD law behind a turning target"))
+    findings.append(Finding(
+        claim="Case 4: the error grows at each manoeuvre until the IMM switches, then falls back",
+        verdict="reproduced" if turn_ok and n_turns == 2 else ("not comparable" if n_turns < 2 else "not reproduced"),
+        why=("; ".join(f"{r[0]}: {r[1]} m before, peak {r[2]} m, {r[3]} m at the end, switch after {r[4]} s"
+                       for r in turn_rows) if turn_rows else "the shortened run has no complete turn")
+            + " (rule: peak > 1.2 × before, end < peak, μ_CT > 0.5 within the turn in ≥ 80 % of runs)"))
+    findings.append(Finding(
+        claim="Steady error ≈ 5 m in case 1 and ≈ 10 m in cases 2–3",
+        verdict="not comparable",
+        why=f"ours (optimal): case 1 {mean_ci(err[(1, 'optimal')]).text()} m, case 2 "
+            f"{mean_ci(err[(2, 'optimal')]).text()} m, case 3 {mean_ci(err[(3, 'optimal')]).text()} m. The paper's "
+            "bearing noise (R = √200 I) has no meaning in radians and its target is a 100 m/s missile 5–10 m from "
+            "the agents; we scale to a car and choose σ = 0.1 rad, so only the ordering can be compared: the "
+            "paper has cases 2 and 3 above case 1; ours has case 2 "
+            + ("above" if mean_ci(err[(2, 'optimal')]).mean > mean_ci(err[(1, 'optimal')]).mean else "below")
+            + " and case 3 "
+            + ("above" if mean_ci(err[(3, 'optimal')]).mean > mean_ci(err[(1, 'optimal')]).mean else "below")
+            + " case 1"))
+
+    return PaperReport(
+        paper="003", title="FIM-optimal formation and IMM bearings-only tracking (Yang & Wang, IEEE Access 2019)",
+        runs=ctx.runs,
+        setup=f"""
+Kinematic closed loop (`autonomy/guidance/formation/closed_loop.py`): three agents with bearing sensors
+(σ = {base.sigma_bearing} rad) every {base.dt} s; an IMM of three EKFs (CV, CT ±{base.turn_rate} rad/s, q = {base.q_cv}
+m²/s³, p_stay = {base.p_stay}) on the stacked bearings (the paper's centralised augmented-measurement EKF per mode); the
+team flies Algorithm 1's geometry around the estimate with the Jacobi PD law (velocity-tracking agents, ≤
+{base.guidance.max_speed} m/s). Baselines with the same filter and PD law: **fixed** — the start geometry held,
+translated with the estimate; **trail** — a ±15° fan behind the target at the start range. Target: 12 m/s from
+{base.target_p0} heading 45°; agents start at {base.agents_p0} with the target's velocity. Cases: 1 CV; 2 constant
+acceleration (0.25, 0.2) m/s²; 3 CT 0.25 rad/s; 4 CV 3 s, CT +0.35 rad/s 10.5 s, CV 3 s, CT −0.35 rad/s 10.5 s, CV 3 s.
+""",
+        tables=(t_err, t_gap, t_turn), figures=tuple(_figures(ctx, runs)), findings=tuple(findings),
+        deviations=(
+            "The paper's target is a 100 m/s missile with agents 5–10 m away; here a car at 12 m/s with agents "
+            "≈ 100 m away (the notes' advice). Case 2's acceleration is scaled from (5, 4) to (0.25, 0.2) m/s² and "
+            "case 4's segment durations ×3 so the turns are a car's (radius 34 m).",
+            "Bearing noise σ = 0.1 rad: the printed R = √200 I is not meaningful for radians; the notes suggest a "
+            "value that puts case 1 near the paper's level.",
+            "IMM model set CV + CT(±0.3 rad/s), transition diagonal 0.95: the paper names CV/CA/CT without matrices.",
+            "The filter starts from the least-squares intersection of the first bearings with the target's known "
+            "initial velocity (the paper's agents start with it).",
+            "Kinematic agents (ideal velocity tracking) rather than quadrotors: the comparison isolates geometry.",
+        ))

@@ -1,0 +1,46 @@
+"""``skytrack reproduce``: reports with the paper's numbers beside ours and a computed verdict per finding."""
+
+import re
+
+import pytest
+
+from simulator.cli import main
+from simulator.reproduce.report import Finding, MeanCI, Table, mean_ci
+
+VERDICT = re.compile(r"\| \*\*(reproduced|not reproduced|not comparable)\*\* \|")
+
+
+def test_mean_ci_is_students_t_interval():
+    ci = mean_ci([1.0, 2.0, 3.0, 4.0])
+    # t_{0.975, 3} = 3.182446; s = 1.290994; half = t s / 2
+    assert ci.mean == pytest.approx(2.5) and ci.half == pytest.approx(3.182446 * 1.290994 / 2, rel=1e-6)
+    assert mean_ci([5.0]) == MeanCI(mean=5.0, half=None, n=1)
+    assert mean_ci([float("nan"), 1.0, 3.0]).n == 2
+
+
+def test_report_parts_validate():
+    with pytest.raises(ValueError, match="verdict must be one of"):
+        Finding(claim="x", verdict="maybe", why="")
+    with pytest.raises(ValueError, match="has 1 cells for 2 columns"):
+        Table(title="t", columns=("a", "b"), rows=(("1",),))
+
+
+@pytest.mark.parametrize("paper", ["003"])
+def test_quick_reproduction_writes_a_report(tmp_path, paper):
+    code = main(["reproduce", paper, "--runs", "2", "--quick", "--quiet", "--out", str(tmp_path), "--workers", "1"])
+    assert code == 0
+    text = (tmp_path / paper / "report.md").read_text()
+    assert "Quick mode" in text and "## Findings" in text
+    assert len(VERDICT.findall(text)) >= 3
+    for png in re.findall(r"\]\(([^)]+\.png)\)", text):
+        assert (tmp_path / paper / png).stat().st_size > 5000
+    index = (tmp_path / "report.md").read_text()
+    assert f"[{paper}/report.md]({paper}/report.md)" in index
+
+
+def test_unknown_paper_and_bad_runs_are_input_errors(tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["reproduce", "007", "--out", str(tmp_path)])
+    assert info.value.code == 2
+    assert main(["reproduce", "003", "--runs", "0", "--out", str(tmp_path)]) == 2
+    assert "--runs must be >= 1" in capsys.readouterr().err

@@ -52,6 +52,14 @@ class TrackerConfig:
         How long a tentative fix waits for its confirming partner (s), > 0.
     lost_after_s : float
         Drop the track after this long without a gated detection (s), > 0.
+    max_missed_scans : int
+        Drop the track after this many consecutive scans with detections that all fall outside the gate, >= 1: a
+        track that rejects everything it is shown has diverged (e.g. a bad two-point velocity) and is re-initiated
+        from the new fixes instead of coasting for ``lost_after_s``.
+    initial_speed_sigma : float | None
+        Standard deviation (m/s) of a zero-mean prior on each velocity component, fused with the two-point velocity
+        at initiation (None: the two-point velocity alone). Two fixes 0.5 s apart with 30 m range noise give a
+        velocity σ near 90 m/s; a car's speed prior bounds that.
     target_height : float
         Height of the ground targets (m).
     """
@@ -65,6 +73,8 @@ class TrackerConfig:
     max_target_speed: float = 30.0
     tentative_window_s: float = 3.0
     lost_after_s: float = 10.0
+    max_missed_scans: int = 4
+    initial_speed_sigma: float | None = 15.0
     target_height: float = 0.0
 
     def __post_init__(self) -> None:
@@ -75,6 +85,11 @@ class TrackerConfig:
         for name in ("q", "singer_alpha", "singer_sigma_a", "max_target_speed", "tentative_window_s", "lost_after_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if int(self.max_missed_scans) != self.max_missed_scans or self.max_missed_scans < 1:
+            raise ValueError(f"TrackerConfig.max_missed_scans must be an integer >= 1, got {self.max_missed_scans!r}")
+        if self.initial_speed_sigma is not None and not self.initial_speed_sigma > 0:
+            raise ValueError(f"TrackerConfig.initial_speed_sigma must be > 0 m/s or None, got "
+                             f"{self.initial_speed_sigma!r}")
         if not 0 < self.gate_probability < 1:
             raise ValueError(f"TrackerConfig.gate_probability must be in (0, 1), got {self.gate_probability!r}")
 
@@ -121,6 +136,8 @@ class SingleTargetTracker:
         self.gated_out = 0
         self.updates = 0
         self.initiations = 0
+        self.dropped_diverged = 0
+        self._missed = 0
         self._gates: dict[int, float] = {}
         self._tentative: list[tuple[float, np.ndarray, np.ndarray]] = []
 
@@ -144,6 +161,12 @@ class SingleTargetTracker:
             self._tentative.extend((t_now, xy, Pxy) for _, (xy, Pxy) in fixes)
             return False
         _, det, xy, Pxy, v, Pv = best
+        if cfg.initial_speed_sigma is not None:  # fuse with the zero-mean speed prior N(0, σ² I)
+            P_prior = np.eye(2) * cfg.initial_speed_sigma**2
+            K = Pv @ np.linalg.inv(Pv + P_prior)
+            v = v - K @ v
+            Pv = Pv - K @ Pv
+            Pv = 0.5 * (Pv + Pv.T)
         n = self.model.n
         x0 = np.zeros(n)
         P0 = np.zeros((n, n))
@@ -158,6 +181,7 @@ class SingleTargetTracker:
         self.last_update_t = det.t_meas
         self._tentative = []
         self.initiations += 1
+        self._missed = 0
         return True
 
     def _gate(self, dof: int) -> float:
@@ -198,8 +222,15 @@ class SingleTargetTracker:
                     best, best_nis = d, nis
             if best is None:
                 self.gated_out += len(dets)
+                self._missed += 1
+                if self._missed >= self.config.max_missed_scans:  # diverged: start again from these fixes
+                    self.filter = None
+                    self.dropped_diverged += 1
+                    self._tentative = []
+                    self._initiate(dets)
                 continue
             self.filter.update(best)
+            self._missed = 0
             self.updates += 1
             self.last_update_t = t_meas
         if self.filter is None:

@@ -1,0 +1,49 @@
+"""Track initiation with a speed prior, and re-initiation of a track that rejects every detection it is shown."""
+
+import numpy as np
+import pytest
+
+from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
+from autonomy.sensing.measurement import Detection
+
+
+def _box(xy, t, sigma=20.0):
+    """A position fix with covariance sigma² I (a bounded-error box detection of half-width sigma √3)."""
+    b = sigma * np.sqrt(3.0)
+    return Detection(z=np.asarray(xy, float), R=np.eye(2) * sigma**2, t_meas=t, t_arrival=t, sensor_id="box",
+                     p_sensor_W=np.array([0.0, 0.0, 100.0]), kind="box", bound=np.array([b, b]))
+
+
+def test_speed_prior_shrinks_a_noisy_two_point_velocity_by_the_bayes_formula():
+    sigma, dt, prior = 20.0, 0.5, 15.0
+    tr = SingleTargetTracker(TrackerConfig(initial_speed_sigma=prior, max_target_speed=200.0))
+    tr.step(0.0, [_box([0.0, 0.0], 0.0, sigma)])
+    tr.step(dt, [_box([40.0, 0.0], dt, sigma)])  # a 80 m/s two-point velocity: 1.4σ of its own noise
+    assert tr.filter is not None
+    pv = 2 * sigma**2 / dt**2  # variance of the two-point velocity per axis
+    k = pv / (pv + prior**2)
+    assert tr.filter.x[tr._iv] == pytest.approx([80.0 * (1 - k), 0.0])
+    assert np.diag(tr.filter.P)[tr._iv] == pytest.approx([pv * (1 - k)] * 2)
+    raw = SingleTargetTracker(TrackerConfig(initial_speed_sigma=None, max_target_speed=200.0))
+    raw.step(0.0, [_box([0.0, 0.0], 0.0, sigma)])
+    raw.step(dt, [_box([40.0, 0.0], dt, sigma)])
+    assert raw.filter.x[raw._iv] == pytest.approx([80.0, 0.0])
+
+
+def test_a_track_that_gates_out_every_scan_is_restarted_from_the_new_fixes():
+    tr = SingleTargetTracker(TrackerConfig(max_missed_scans=3, lost_after_s=100.0))
+    for k in range(6):  # a track on a target at rest at the origin
+        tr.step(0.5 * k, [_box([0.0, 0.0], 0.5 * k, 2.0)])
+    assert tr.initiations == 1
+    far = np.array([400.0, -300.0])  # the target is really here: every fix is far outside the gate
+    for k in range(6, 12):
+        tr.step(0.5 * k, [_box(far, 0.5 * k, 2.0)])
+    assert tr.dropped_diverged == 1 and tr.initiations == 2
+    assert np.linalg.norm(tr.filter.x[tr._ix] - far) < 10.0
+
+
+def test_bad_settings_are_named():
+    with pytest.raises(ValueError, match="max_missed_scans"):
+        TrackerConfig(max_missed_scans=0)
+    with pytest.raises(ValueError, match="initial_speed_sigma"):
+        TrackerConfig(initial_speed_sigma=-1.0)

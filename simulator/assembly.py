@@ -322,7 +322,7 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
             estimator = options.estimator_factory(i, u)
         else:
             estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator", u.autonomy.estimator,
-                                 lambda: build_estimator(u, i))
+                                 lambda: build_estimator(u, i, geometry.network))
         if options.guidance_factory is not None:
             guidance = options.guidance_factory(i, u)
         else:

@@ -70,12 +70,31 @@ def build_sensor(spec: Any, name: str, buildings: Any = ()) -> Any:
     raise TypeError(f"unknown sensor spec {type(spec).__name__}")
 
 
-def build_estimator(uav: UavSpec, index: int) -> Any:
-    """The UAV's target estimator: the built-in single-target tracker, or a plugin class built with ``params``."""
+ROAD_FALLBACK_FILTER = {"maekf": "ekf", "ecukf": "ukf"}
+"""Unconstrained filter a road-constrained tracker starts tracks with and falls back to off the map."""
+
+
+def build_estimator(uav: UavSpec, index: int, network: Any = None) -> Any:
+    """The UAV's target estimator: the built-in single-target tracker, a road-constrained tracker on ``network``
+    (the world's :class:`~worlds.roads.network.RoadNetwork`) for ``maekf``/``ecukf``, or a plugin class built with
+    ``params``."""
     est = uav.autonomy.estimator
     if est.type == "plugin":
         cls = load_plugin(est.plugin, f"uavs[{index}].autonomy.estimator.plugin", ("step",))
         return cls(**est.params)
+    if est.type in ROAD_FALLBACK_FILTER:
+        from autonomy.estimation.road.config import RoadFilterConfig
+        from autonomy.estimation.road.constraint import RoadConstraintParams
+        from autonomy.estimation.road.tracker import RoadConstrainedTracker, RoadTrackerConfig
+
+        if network is None:
+            raise ValueError(f"estimator type {est.type!r} needs the world's road network (roads: ...)")
+        road = dict(est.road)
+        if isinstance(road.get("constraint"), dict):
+            road["constraint"] = RoadConstraintParams(**road["constraint"])
+        tracker = TrackerConfig(filter=ROAD_FALLBACK_FILTER[est.type], model=est.model, **est.params)
+        return RoadConstrainedTracker(RoadTrackerConfig(tracker=tracker, road=RoadFilterConfig(variant=est.type,
+                                                                                                **road)), network)
     return SingleTargetTracker(TrackerConfig(filter=est.type, model=est.model, **est.params))
 
 

@@ -41,7 +41,15 @@ def check_world(world: World) -> list[WorldIssue]:
     if world.uavs and world.render.uav >= len(world.uavs):
         issues.append(WorldIssue("render.uav", world.render.uav,
                                  f"the index of one of the world's {len(world.uavs)} UAVs (0 .. {len(world.uavs) - 1})"))
+    has_roads = any(getattr(world.roads, k, None) for k in ("streets", "town", "osm"))
     for i, uav in enumerate(world.uavs):
+        est = uav.autonomy.estimator
+        if est.type in ("maekf", "ecukf") and not has_roads:
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est.type,
+                                     "an estimator without a road map (ekf, ukf, ...): this world has no roads"))
+        if est.road and est.type not in ("maekf", "ecukf"):
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.road", est.road,
+                                     "no 'road' settings unless the type is maekf or ecukf"))
         rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
         rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)
         for j, sensor in enumerate(uav.sensors):

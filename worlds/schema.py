@@ -249,11 +249,17 @@ def _check_plugin(kind: str, plugin: str | None) -> None:
 
 
 class EstimatorSpec(Strict):
-    type: Literal["ekf", "ukf", "ckf", "scif", "plugin"] = "ekf"
+    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter, a
+    road-constrained tracker (paper 002: ``maekf`` pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on
+    the world's road map, with junction hypotheses and an unconstrained fallback off the map), or a user plugin."""
+
+    type: Literal["ekf", "ukf", "ckf", "scif", "maekf", "ecukf", "plugin"] = "ekf"
     model: Literal["cv", "singer"] = "cv"
     plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="TrackerConfig fields, or keyword arguments of a plugin class")
+    road: dict[str, Any] = Field(default_factory=dict,
+                                 description="RoadFilterConfig fields for maekf/ecukf (autonomy.estimation.road.config)")
 
     @model_validator(mode="after")
     def _plugin(self) -> EstimatorSpec:

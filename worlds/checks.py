@@ -39,17 +39,9 @@ def check_world(world: World) -> list[WorldIssue]:
     rate("sim.record_hz", world.sim.record_hz)
     # render.fps needs no divisor check: the video is replayed from the record, interpolated to each frame's time
     if world.uavs and world.render.uav >= len(world.uavs):
-        issues.append(WorldIssue("render.uav", world.render.uav,
-                                 f"the index of one of the world's {len(world.uavs)} UAVs (0 .. {len(world.uavs) - 1})"))
-    has_roads = any(getattr(world.roads, k, None) for k in ("streets", "town", "osm"))
+        n = len(world.uavs)
+        issues.append(WorldIssue("render.uav", world.render.uav, f"the index of one of the world's {n} UAVs (0 .. {n - 1})"))
     for i, uav in enumerate(world.uavs):
-        est = uav.autonomy.estimator
-        if est.type in ("maekf", "ecukf") and not has_roads:
-            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est.type,
-                                     "an estimator without a road map (ekf, ukf, ...): this world has no roads"))
-        if est.road and est.type not in ("maekf", "ecukf"):
-            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.road", est.road,
-                                     "no 'road' settings unless the type is maekf or ecukf"))
         rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
         rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)
         for j, sensor in enumerate(uav.sensors):
@@ -68,6 +60,14 @@ def check_world(world: World) -> list[WorldIssue]:
             issues.append(WorldIssue(f"targets[{k}]", tid, f"the id of a ground vehicle ({sorted(vehicle_ids) or 'none defined'})"))
 
     has_roads = bool(world.roads.streets or world.roads.osm or world.roads.town)
+    for i, uav in enumerate(world.uavs):
+        est = uav.autonomy.estimator
+        if est.type in ("maekf", "ecukf") and not has_roads:
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est.type,
+                                     "an estimator without a road map (ekf, ukf, ...): this world has no roads"))
+        if est.road and est.type not in ("maekf", "ecukf"):
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.road", est.road,
+                                     "no 'road' settings unless the type is maekf or ecukf"))
     for i, g in enumerate(world.ground_vehicles):
         if not has_roads:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),

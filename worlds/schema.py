@@ -259,7 +259,7 @@ class EstimatorSpec(Strict):
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="TrackerConfig fields, or keyword arguments of a plugin class")
     road: dict[str, Any] = Field(default_factory=dict,
-                                 description="RoadFilterConfig fields for maekf/ecukf (autonomy.estimation.road.config)")
+                                 description="maekf/ecukf: RoadFilterConfig fields (autonomy.estimation.road.config)")
 
     @model_validator(mode="after")
     def _plugin(self) -> EstimatorSpec:

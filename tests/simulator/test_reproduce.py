@@ -25,9 +25,10 @@ def test_report_parts_validate():
         Table(title="t", columns=("a", "b"), rows=(("1",),))
 
 
-@pytest.mark.parametrize("paper", ["003"])
-def test_quick_reproduction_writes_a_report(tmp_path, paper):
-    code = main(["reproduce", paper, "--runs", "2", "--quick", "--quiet", "--out", str(tmp_path), "--workers", "1"])
+@pytest.mark.parametrize("paper,runs", [("000", 2), ("002", 1), ("003", 2)])
+def test_quick_reproduction_writes_a_report(tmp_path, paper, runs):
+    code = main(["reproduce", paper, "--runs", str(runs), "--quick", "--quiet", "--out", str(tmp_path),
+                 "--workers", "1"])
     assert code == 0
     text = (tmp_path / paper / "report.md").read_text()
     assert "Quick mode" in text and "## Findings" in text

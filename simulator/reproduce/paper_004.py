@@ -1,0 +1,205 @@
+"""Reproduction of paper 004 (Ibenenthal et al.): set-membership search and tracking with decoys and obstacles.
+
+Runs the kinematic mission :mod:`autonomy.guidance.search.mission` (the paper's section V: 500 m × 500 m, 5 random
+cuboid obstacles, 2 targets, 2 decoys, 4 UAVs, 400 steps of 1 s) ``ctx.runs`` times with the sequential search MPC
+and, as a baseline, with random turns, each run's world drawn from its own seed.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from autonomy.guidance.search.mission import MissionConfig, MissionResult, SearchMission
+from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
+
+__all__ = ["reproduce"]
+
+PAPER_MISSION_S = 2700.0
+D_COL = 5.0  # m, the paper's collision distance
+EMPTY = 0.01  # φ(X̄)/φ(X0) below which X̄ counts as empty
+QUICK = {"steps": 20, "n_uavs": 2}
+
+
+@dataclass(frozen=True)
+class _Run:
+    result: MissionResult
+    cpu_s: float
+
+
+def _one(args: tuple[str, int, bool]) -> _Run:
+    control, seed, quick = args
+    cfg = MissionConfig(control=control, **(QUICK if quick else {}))
+    t0 = time.process_time()
+    res = SearchMission(cfg, np.random.default_rng(seed)).run()
+    return _Run(result=res, cpu_s=time.process_time() - t0)
+
+
+def _run_all(ctx: ReproContext) -> dict[str, list[_Run]]:
+    jobs = [(control, ctx.seed * 100_003 + r, ctx.quick) for control in ("mpc", "random") for r in range(ctx.runs)]
+    workers = ctx.workers or os.cpu_count() or 1
+    if workers == 1 or len(jobs) == 1:
+        results = [_one(j) for j in jobs]
+    else:
+        with cf.ProcessPoolExecutor(min(workers, len(jobs))) as pool:
+            results = list(pool.map(_one, jobs))
+    out: dict[str, list[_Run]] = {"mpc": [], "random": []}
+    for (control, _, _), res in zip(jobs, results, strict=True):
+        out[control].append(res)
+    return out
+
+
+def _at(runs: list[_Run], what: str, step: int) -> np.ndarray:
+    """Per run, the team-mean normalised area of ``X`` or ``Xbar`` after step ``step`` (1-based, clipped)."""
+    out = []
+    for r in runs:
+        a = getattr(r.result, what).mean(axis=1)
+        out.append(a[min(step, len(a)) - 1])
+    return np.array(out)
+
+
+def _figure(ctx: ReproContext, runs: dict[str, list[_Run]]) -> Figure:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 4.8), dpi=100)
+    for control, ls in (("mpc", "-"), ("random", ":")):
+        for what, color, label in (("area_Xbar", "tab:blue", "φ(X̄)/φ(X0)"), ("area_X", "tab:red", "φ(X)/φ(X0)")):
+            a = np.array([getattr(r.result, what).mean(axis=1) for r in runs[control]])
+            k = np.arange(1, a.shape[1] + 1)
+            ax.plot(k, a.mean(axis=0), ls, color=color, lw=1.4, label=f"{label}, {control}")
+            if control == "mpc" and len(a) > 1:
+                ax.fill_between(k, np.percentile(a, 10, axis=0), np.percentile(a, 90, axis=0), color=color,
+                                alpha=0.15, lw=0)
+    if not ctx.quick:
+        ax.plot([300], [0.0], "bs", ms=8, label="paper: φ(X̄) ≈ 0 by step 300")
+        ax.plot([400], [0.035], "r^", ms=8, label="paper: φ(X) = 0.035 at step 400")
+    ax.set_xlabel("step (1 s)")
+    ax.set_ylabel("normalised area")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(f"Set areas, team mean over {len(runs['mpc'])} runs (band: 10–90 % of the MPC runs)")
+    fig.tight_layout()
+    fig.savefig(ctx.out_dir / "areas.png")
+    plt.close(fig)
+    return Figure(path="areas.png", caption="Normalised areas of X and X̄ over time (the paper's Fig. 6)")
+
+
+def reproduce(ctx: ReproContext) -> PaperReport:
+    """Run the missions and judge the paper's claims; see the module docstring."""
+    runs = _run_all(ctx)
+    cfg = MissionConfig(**(QUICK if ctx.quick else {}))
+    last = cfg.steps
+    mid = min(300, last)
+
+    def stats(control: str) -> dict[str, np.ndarray]:
+        rs = runs[control]
+        empty = [r.result.xbar_empty_step(EMPTY) for r in rs]
+        decoy_seen = np.array([bool(r.result.decoy_in_X.any()) for r in rs]) if cfg.n_decoys else np.zeros(len(rs))
+        decoy_end = np.array([bool(r.result.decoy_in_X[-1].any()) for r in rs]) if cfg.n_decoys else np.zeros(len(rs))
+        return {"xbar_mid": _at(rs, "area_Xbar", mid), "x_last": _at(rs, "area_X", last),
+                "xbar_last": _at(rs, "area_Xbar", last),
+                "empty": np.array([np.nan if e is None else e for e in empty], dtype=float),
+                "guarantee": np.array([r.result.guarantee_rate for r in rs]),
+                "decoy_steps": np.array([float(r.result.decoy_in_X.any(axis=1).sum()) for r in rs]),
+                "decoy_seen": decoy_seen, "decoy_end": decoy_end,
+                "collisions": np.array([r.result.collisions(D_COL) for r in rs]),
+                "min_obs": np.array([float(r.result.min_obstacle_distance.min()) for r in rs]),
+                "cpu": np.array([r.cpu_s for r in rs])}
+
+    s = {c: stats(c) for c in runs}
+    n = len(runs["mpc"])
+
+    def emptied(c: str) -> str:
+        e = s[c]["empty"]
+        return f"{int(np.isfinite(e).sum())} of {n} runs" + (f" (median step {np.nanmedian(e):.0f})"
+                                                              if np.isfinite(e).any() else "")
+
+    rows = (
+        (f"φ(X̄)/φ(X0) at step {mid}", "≈ 0" if mid == 300 else "–", mean_ci(s["mpc"]["xbar_mid"]).text(),
+         mean_ci(s["random"]["xbar_mid"]).text()),
+        (f"φ(X)/φ(X0) at step {last}", "0.035" if last == 400 else "–", mean_ci(s["mpc"]["x_last"]).text(),
+         mean_ci(s["random"]["x_last"]).text()),
+        (f"X̄ emptied (φ < {EMPTY:g})", "by step ≈ 300", emptied("mpc"), emptied("random")),
+        ("guarantee: targets inside X ∪ X̄ (fraction of checks)", "1 (by construction)",
+         f"{s['mpc']['guarantee'].min():.4f} (worst run)", f"{s['random']['guarantee'].min():.4f} (worst run)"),
+        ("steps with a decoy inside X", "decoys taken for targets, later erased",
+         mean_ci(s["mpc"]["decoy_steps"]).text(), mean_ci(s["random"]["decoy_steps"]).text()),
+        ("runs where a decoy entered X / is still in X at the end", "–",
+         f"{int(s['mpc']['decoy_seen'].sum())} / {int(s['mpc']['decoy_end'].sum())}",
+         f"{int(s['random']['decoy_seen'].sum())} / {int(s['random']['decoy_end'].sum())}"),
+        (f"UAV-steps within {D_COL:g} m of an obstacle", "0", f"{int(s['mpc']['collisions'].sum())}",
+         f"{int(s['random']['collisions'].sum())}"),
+        ("CPU time per mission (s)", f"{PAPER_MISSION_S:g} (MATLAB)", mean_ci(s["mpc"]["cpu"]).text(),
+         mean_ci(s["random"]["cpu"]).text()),
+    )
+    t1 = Table(title="The paper's figures beside ours", columns=("quantity", "paper", "search MPC", "random turns"),
+               rows=rows, note=f"Mean ± 95 % CI over {n} runs per column; each run draws its own obstacles, targets, "
+                               "decoys and UAV starts from its seed (the same seeds in both columns).")
+
+    findings = []
+    g = min(s["mpc"]["guarantee"].min(), s["random"]["guarantee"].min())
+    findings.append(Finding(claim="Every true target is inside X ∪ X̄ of every UAV at every step",
+                            verdict="reproduced" if g == 1.0 else "not reproduced",
+                            why=f"smallest fraction of checks satisfied in any run: {g:.6f}"))
+    xb = mean_ci(s["mpc"]["xbar_mid"])
+    findings.append(Finding(
+        claim="X̄ is (nearly) empty by step 300",
+        verdict=("not comparable" if mid != 300 else ("reproduced" if xb.mean < 0.05 else "not reproduced")),
+        why=(f"φ(X̄)/φ(X0) at step {mid}: {xb.text()}; emptied (< {EMPTY:g}) in {emptied('mpc')}. "
+             + ("" if xb.mean < 0.05 else "Regrowth outruns clearing: X̄ is dilated by 1.39 m per step along its "
+                "whole boundary, and our one-step sequential MPC sweeps cleared stripes that refill from their "
+                "edges; the paper's planner evidently clears contiguously. Open: see the project's issue notes.")
+             if mid == 300 else "the shortened missions end before step 300")))
+    findings.append(Finding(
+        claim="The search MPC shrinks X̄ faster than undirected flight",
+        verdict="reproduced" if mean_ci(s["mpc"]["xbar_mid"] - s["random"]["xbar_mid"]).mean < 0
+        and _significant(s["mpc"]["xbar_mid"] - s["random"]["xbar_mid"]) else "not reproduced",
+        why=f"MPC − random φ(X̄)/φ(X0) at step {mid} (paired by seed): "
+            f"{mean_ci(s['mpc']['xbar_mid'] - s['random']['xbar_mid']).text()}"))
+    seen, end = int(s["mpc"]["decoy_seen"].sum()), int(s["mpc"]["decoy_end"].sum())
+    findings.append(Finding(
+        claim="Decoys are taken for targets and later erased by another UAV's view",
+        verdict=("not comparable" if seen == 0 else ("reproduced" if end < seen else "not reproduced")),
+        why=f"a decoy entered X in {seen} of {n} MPC runs and was still in X at the end in {end}"))
+    findings.append(Finding(
+        claim="No UAV comes within d_col = 5 m of an obstacle",
+        verdict="reproduced" if s["mpc"]["collisions"].sum() == 0 else "not reproduced",
+        why=f"closest approach over all MPC runs {s['mpc']['min_obs'].min():.1f} m"))
+    cpu = mean_ci(s["mpc"]["cpu"])
+    findings.append(Finding(
+        claim=f"A 400-step mission costs far less than the paper's {PAPER_MISSION_S:g} s (target ≤ 60 s)",
+        verdict="reproduced" if cpu.mean <= 60.0 else "not reproduced",
+        why=f"CPU time per mission {cpu.text()} s" + (" (shortened missions)" if ctx.quick else "")))
+
+    s_cfg = cfg.search
+    return PaperReport(
+        paper="004", title="Target search and tracking in presence of decoys and obstacles (Ibenenthal et al.)",
+        runs=n,
+        setup=f"""
+Kinematic mission (`autonomy/guidance/search/mission.py`): {cfg.n_uavs} UAVs at {s_cfg.speed * 3.6:.0f} km/h, turn
+bound ±{np.degrees(s_cfg.max_turn):.0f}° per step, T = {s_cfg.dt:g} s, {cfg.steps} steps; nadir box sensors (π/4
+opening, 82.8 m footprint at 100 m, ±5 m bounded error) with obstacle shadows; {cfg.n_targets} targets and
+{cfg.n_decoys} decoys at 5 km/h with random heading changes in [−π/5, π/5]; {cfg.n_obstacles} cuboid obstacles
+30–70 m wide and 100 m tall in a {cfg.area_size[0]:g} m × {cfg.area_size[1]:g} m area; set-membership estimators on
+polygon unions with outer dilation, correction, and fusion over line-of-sight links; sequential one-step search MPC
+with the paper's weights (α_m 1.3, α_d 4.5, α_s 3500). Baseline: random turns with the same estimators.
+""",
+        tables=(t1,), figures=(_figure(ctx, runs),), findings=tuple(findings),
+        deviations=(
+            "Turn bound ±π/4 per step (the paper gives none).",
+            "Random worlds per run; the paper's obstacle layout is not given.",
+            "CPU time is this process's on a shared 2-core machine.",
+        ) + (("Quick mode: 20 steps, 2 UAVs — not a reproduction.",) if ctx.quick else ()))
+
+
+def _significant(d: np.ndarray) -> bool:
+    ci = mean_ci(d)
+    return ci.half is None or ci.mean + ci.half < 0

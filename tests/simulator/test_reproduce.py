@@ -25,7 +25,7 @@ def test_report_parts_validate():
         Table(title="t", columns=("a", "b"), rows=(("1",),))
 
 
-@pytest.mark.parametrize("paper,runs", [("000", 2), ("002", 1), ("003", 2), ("004", 2)])
+@pytest.mark.parametrize("paper,runs", [("000", 2), ("001", 2), ("002", 1), ("003", 2), ("004", 2)])
 def test_quick_reproduction_writes_a_report(tmp_path, paper, runs):
     code = main(["reproduce", paper, "--runs", str(runs), "--quick", "--quiet", "--out", str(tmp_path),
                  "--workers", "1"])

@@ -2,7 +2,8 @@
 
 The agent runs at its own rate. Between its steps, detections arrive (each with the time it was taken and the time it
 reaches the agent); at a step the agent hands every detection that has arrived, in the order they were taken, to its
-estimator, which predicts to each measurement's own time stamp; then the guidance law turns the estimate into a set-point.
+estimator, which predicts to each measurement's own time stamp; then the guidance law turns the estimate into a
+set-point.
 
 Users plug in their own estimator or guidance law: anything with the methods of :class:`TargetEstimator` or
 :class:`GuidanceLaw` works (no base class needed), named by import path in the world file (``type: plugin``,
@@ -28,7 +29,8 @@ class TargetEstimator(Protocol):
     """What the agent needs from an estimator."""
 
     def step(self, t: float, detections: Sequence[Detection]) -> TargetEstimate | None:
-        """Absorb ``detections`` (arrived by ``t``, sorted by ``t_meas``) and return the estimate valid at ``t`` (s), if any."""
+        """Absorb ``detections`` (arrived by ``t``, sorted by ``t_meas``) and return the estimate valid at ``t`` (s),
+        if any."""
         ...
 
 

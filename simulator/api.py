@@ -56,7 +56,8 @@ class RunResult:
         return {k: v[mask] for k, v in data.items()}
 
     def target_truth_at(self, t: np.ndarray, vehicle: int = 0) -> np.ndarray:
-        """True (x, y) of ground vehicle ``vehicle`` at times ``t`` (linear interpolation of the record), (len(t), 2)."""
+        """True (x, y) of ground vehicle ``vehicle`` at times ``t`` (linear interpolation of the record), (len(t),
+        2)."""
         vt = self.stream("vehicle_truth", vehicle=vehicle)
         t = np.asarray(t, dtype=float)
         return np.stack([np.interp(t, vt["t"], vt["x"]), np.interp(t, vt["t"], vt["y"])], axis=-1)

@@ -1,4 +1,5 @@
-"""A world, built: the PyBullet scene, the vehicle fleets, each UAV's sensors and agent, and one tick of the run loop."""
+"""A world, built: the PyBullet scene, the vehicle fleets, each UAV's sensors and agent, and one tick of the run
+loop."""
 
 from __future__ import annotations
 
@@ -206,7 +207,7 @@ class Assembly:
                 "lateral": np.asarray(st.lateral)})
 
     def _record_detections(self, tick: int, t: float, slot: SensorSlot, out: Any) -> None:
-        for d, tid in zip(out.detections, out.truth_ids):
+        for d, tid in zip(out.detections, out.truth_ids, strict=True):
             z = np.full(4, np.nan)
             z[: min(4, d.z.size)] = d.z[:4]
             self.recorder.append("detections", tick=tick, t_meas=d.t_meas, t_arrival=d.t_arrival, uav=slot.uav,
@@ -251,9 +252,9 @@ class Assembly:
         names = {self.scene.ground_id: "ground"}
         names.update({b: "building" for b in self.scene.building_ids})
         if self.quads is not None:
-            names.update({int(b): f"uav {u}" for b, u in zip(self.quads.body_ids, self.uav_ids)})
+            names.update({int(b): f"uav {u}" for b, u in zip(self.quads.body_ids, self.uav_ids, strict=True)})
         if self.cars is not None:
-            names.update({int(b): f"vehicle {c}" for b, c in zip(self.cars.body_ids, self.car_ids)})
+            names.update({int(b): f"vehicle {c}" for b, c in zip(self.cars.body_ids, self.car_ids, strict=True)})
         return names
 
     def close(self) -> None:

@@ -39,7 +39,8 @@ class Clock:
         return int(round(seconds * self.physics_hz))
 
     def divisor(self, rate_hz: float, what: str = "rate_hz") -> int:
-        """Ticks between events at ``rate_hz``; raises ``ValueError`` naming ``what`` if it does not divide the physics rate."""
+        """Ticks between events at ``rate_hz``; raises ``ValueError`` naming ``what`` if it does not divide the physics
+        rate."""
         d = rate_divisor(rate_hz, self.physics_hz)
         if d is None:
             raise ValueError(f"{what} = {rate_hz} Hz does not divide physics_hz = {self.physics_hz} into whole ticks")

@@ -1,4 +1,5 @@
-"""Writing a run directory incrementally, so a run that raises, is interrupted or is killed still leaves a readable record.
+"""Writing a run directory incrementally, so a run that raises, is interrupted or is killed still leaves a readable
+record.
 
 Layout of a run directory::
 

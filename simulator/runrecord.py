@@ -1,4 +1,5 @@
-"""Reading a run directory back (complete or partial): time series as numpy arrays (or pandas frames), events, metrics."""
+"""Reading a run directory back (complete or partial): time series as numpy arrays (or pandas frames), events,
+metrics."""
 
 from __future__ import annotations
 

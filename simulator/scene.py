@@ -2,7 +2,8 @@
 
 Static geometry is batched: cuboid buildings become a few static *compound* bodies (``createCollisionShapeArray``, up to
 ``chunk`` boxes each) and non-cuboid footprints one static concave mesh. Hundreds of separate static bodies would cost
-~0.2 ms per physics step in Bullet's broadphase (measured: 500 bodies 0.18 ms/step, one compound 0.002 ms/step); batched,
+~0.2 ms per physics step in Bullet's broadphase (measured: 500 bodies 0.18 ms/step, one compound 0.002 ms/step);
+batched,
 a 500-building town adds nothing measurable to a step and builds in tens of milliseconds.
 """
 
@@ -151,7 +152,8 @@ class Scene:
         parts = [_extrude(b.footprint, b.base_z, b.top_z) for b in buildings]
         offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
         mesh = trimesh.Trimesh(vertices=np.concatenate([v for v, _ in parts]),
-                               faces=np.concatenate([f + o for (_, f), o in zip(parts, offsets)]), process=False)
+                               faces=np.concatenate([f + o for (_, f), o in zip(parts, offsets, strict=True)]),
+                               process=False)
         return self.add_static_mesh(mesh, BUILDING_RGBA, collision=True)
 
     def add_static_mesh(self, mesh: trimesh.Trimesh, rgba: Sequence[float], collision: bool) -> int:

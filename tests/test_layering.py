@@ -6,7 +6,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-FORBIDDEN = {"autonomy": {"pybullet", "simulator", "vehicles"}, "worlds": {"pybullet", "simulator", "vehicles", "autonomy"},
+FORBIDDEN = {"autonomy": {"pybullet", "simulator", "vehicles"},
+             "worlds": {"pybullet", "simulator", "vehicles", "autonomy"},
              "vehicles": {"simulator", "autonomy"}}
 
 

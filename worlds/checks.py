@@ -40,7 +40,8 @@ def check_world(world: World) -> list[WorldIssue]:
     # render.fps needs no divisor check: the video is replayed from the record, interpolated to each frame's time
     if world.uavs and world.render.uav >= len(world.uavs):
         n = len(world.uavs)
-        issues.append(WorldIssue("render.uav", world.render.uav, f"the index of one of the world's {n} UAVs (0 .. {n - 1})"))
+        issues.append(WorldIssue("render.uav", world.render.uav,
+                                 f"the index of one of the world's {n} UAVs (0 .. {n - 1})"))
     for i, uav in enumerate(world.uavs):
         rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
         rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)
@@ -57,7 +58,8 @@ def check_world(world: World) -> list[WorldIssue]:
     vehicle_ids = {g.id for g in world.ground_vehicles}
     for k, tid in enumerate(world.targets or []):
         if tid not in vehicle_ids:
-            issues.append(WorldIssue(f"targets[{k}]", tid, f"the id of a ground vehicle ({sorted(vehicle_ids) or 'none defined'})"))
+            issues.append(WorldIssue(f"targets[{k}]", tid,
+                                     f"the id of a ground vehicle ({sorted(vehicle_ids) or 'none defined'})"))
 
     has_roads = bool(world.roads.streets or world.roads.osm or world.roads.town)
     for i, uav in enumerate(world.uavs):
@@ -78,5 +80,6 @@ def check_world(world: World) -> list[WorldIssue]:
             issues.append(WorldIssue(f"comms.outages[{i}].end_s", o.end_s, f"a time after start_s={o.start_s}"))
         for k, node in enumerate(o.link):
             if node not in uav_ids:
-                issues.append(WorldIssue(f"comms.outages[{i}].link[{k}]", node, f"a UAV id or 'base' ({sorted(uav_ids)})"))
+                issues.append(WorldIssue(f"comms.outages[{i}].link[{k}]", node,
+                                         f"a UAV id or 'base' ({sorted(uav_ids)})"))
     return issues

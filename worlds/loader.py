@@ -1,7 +1,9 @@
 """Load a world file by name or path, apply ``--set`` overrides and validate it, before anything runs.
 
-``load_world("road_standoff")`` finds ``worlds/road_standoff.yaml`` shipped with the package; any other argument is a path.
-Every problem — missing file, bad YAML, unknown key, wrong type, out-of-range value, a rate that does not divide the physics
+``load_world("road_standoff")`` finds ``worlds/road_standoff.yaml`` shipped with the package; any other argument is a
+path.
+Every problem — missing file, bad YAML, unknown key, wrong type, out-of-range value, a rate that does not divide the
+physics
 rate — raises :class:`worlds.errors.WorldError` naming the file, the key path, the bad value and what was expected.
 """
 
@@ -77,7 +79,8 @@ def parse_key_path(key: str) -> list[str | int]:
 
 
 def parse_override(text: str) -> tuple[list[str | int], Any]:
-    """``"sim.duration_s=30"`` -> (["sim", "duration_s"], 30). The value is read as YAML (``[1, 2, 3]``, ``true``, ``null``)."""
+    """``"sim.duration_s=30"`` -> (["sim", "duration_s"], 30). The value is read as YAML (``[1, 2, 3]``, ``true``,
+    ``null``)."""
     if "=" not in text:
         raise ValueError(f"override {text!r} must look like key.path=value")
     key, value = text.split("=", 1)
@@ -215,7 +218,8 @@ def load_world(source: str | Path, overrides: list[str] | tuple[str, ...] = ()) 
     file = str(path)
     if not path.is_file():
         known = ", ".join(shipped_worlds()) or "none"
-        raise WorldError(file, [WorldIssue("<file>", str(source), f"an existing world file or a shipped world name ({known})")])
+        raise WorldError(file, [WorldIssue("<file>", str(source),
+                                           f"an existing world file or a shipped world name ({known})")])
     text = path.read_text(encoding="utf-8")
     try:
         raw = yaml.safe_load(text)

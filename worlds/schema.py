@@ -101,7 +101,8 @@ class StreetSpec(Strict):
 
 
 class OsmSection(Strict):
-    path: str = Field(description="an .osm.pbf or .osm file; relative paths resolve against the world file, then assets/maps")
+    path: str = Field(description="an .osm.pbf or .osm file; relative paths resolve against the world file, "
+                                  "then assets/maps")
     bbox: tuple[float, float, float, float] | None = Field(None, description="lon_min, lat_min, lon_max, lat_max")
     default_height: PositiveFloat = Field(9.0, description="height of buildings without height tags, m")
 

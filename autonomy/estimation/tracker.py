@@ -2,12 +2,14 @@
 
 The tracker is what an agent calls at its rate (:class:`autonomy.agent.TargetEstimator`). Detections arrive in
 ``t_meas`` order; the filter predicts to each one's own time stamp. Association is global nearest neighbour per scan
-(detections sharing ``t_meas`` and ``sensor_id``): the detection with the smallest NIS inside the gate updates the track.
+(detections sharing ``t_meas`` and ``sensor_id``): the detection with the smallest NIS inside the gate updates the
+track.
 A track that has seen no gated detection for ``lost_after_s`` is dropped and re-initiated from the next detection.
 
 Initiation is two-point: each radar or box detection is inverted to a ground position fix (radar range and azimuth to a
 point on the target plane) and kept as a tentative fix; a fix of a later scan that lies within
-``max_target_speed · Δt`` plus a 3σ margin of a tentative one confirms a track, with the position of the newer fix and the
+``max_target_speed · Δt`` plus a 3σ margin of a tentative one confirms a track, with the position of the newer fix and
+the
 velocity of the pair. A lone false alarm therefore never starts a track, and clutter pairs are rare when false alarms
 are spread over the radar's whole field of regard.
 """
@@ -142,7 +144,8 @@ class SingleTargetTracker:
         self._tentative: list[tuple[float, np.ndarray, np.ndarray]] = []
 
     def _initiate(self, dets: Sequence[object]) -> bool:
-        """Try to confirm a track from this scan's fixes and the tentative fixes of earlier scans; keep the new fixes."""
+        """Try to confirm a track from this scan's fixes and the tentative fixes of earlier scans; keep the new
+        fixes."""
         cfg = self.config
         fixes = [(d, f) for d in dets if (f := _ground_fix(d, cfg.target_height)) is not None]
         if not fixes:
@@ -202,7 +205,8 @@ class SingleTargetTracker:
         return float(nu @ np.linalg.solve(S, nu))
 
     def step(self, t: float, detections: Sequence[object]) -> TargetEstimate | None:
-        """Absorb ``detections`` (sorted by ``t_meas``) and return the estimate at ``t`` (s), or None without a track."""
+        """Absorb ``detections`` (sorted by ``t_meas``) and return the estimate at ``t`` (s), or None without a
+        track."""
         scans: dict[tuple[float, str], list] = {}
         for d in detections:
             scans.setdefault((d.t_meas, d.sensor_id), []).append(d)

@@ -1,6 +1,7 @@
 """Fusing a UAV's own target estimate with the estimates its teammates shared (paper 002's state-vector fusion, or CI).
 
-Shared estimates arrive late (radio latency, the sender's agent period): each is first predicted to the fusion time with a
+Shared estimates arrive late (radio latency, the sender's agent period): each is first predicted to the fusion time
+with a
 nearly-constant-velocity model, ``p += v·Δt``, ``P ← F P Fᵀ + Q(Δt)`` with white-acceleration density ``q``; estimates
 older than ``max_age_s`` are dropped. The fused estimate is what guidance uses; the local filter is not reset with it
 (no feedback), as in paper 002, so fusing repeatedly does not double-count a teammate's information in its own filter.
@@ -74,7 +75,8 @@ class TrackFusion:
         self.fusions = 0
 
     def fuse(self, t: float, own: TargetEstimate | None, shared: Sequence[TargetEstimate]) -> TargetEstimate | None:
-        """The fused estimate at ``t`` (s); the own estimate alone (or the freshest shared one) when nothing else is usable."""
+        """The fused estimate at ``t`` (s); the own estimate alone (or the freshest shared one) when nothing else is
+        usable."""
         cfg = self.config
         fresh = [predict_estimate(e, t, cfg.q) for e in shared
                  if e.P is not None and 0.0 <= t - e.t <= cfg.max_age_s]
@@ -87,7 +89,7 @@ class TrackFusion:
         Ps = [e.P for e in parts]
         if cfg.method == "convex":
             x, P = xs[0], Ps[0]
-            for xb, Pb in zip(xs[1:], Ps[1:]):
+            for xb, Pb in zip(xs[1:], Ps[1:], strict=False):
                 f = state_vector_fusion(x, P, xb, Pb)
                 x, P = f.x, f.P
         else:

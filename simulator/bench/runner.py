@@ -23,7 +23,8 @@ def discover() -> dict[str, registry.Benchmark]:
     return registry.registered()
 
 
-def run_benchmarks(only: re.Pattern | None = None, progress: bool = True) -> tuple[list[BenchRecord], list[tuple[str, str]]]:
+def run_benchmarks(only: re.Pattern | None = None,
+                   progress: bool = True) -> tuple[list[BenchRecord], list[tuple[str, str]]]:
     """Run the benchmarks whose name or record names match ``only``; returns (records, failures)."""
     records: list[BenchRecord] = []
     failures: list[tuple[str, str]] = []

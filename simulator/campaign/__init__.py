@@ -1,1 +1,2 @@
-"""Monte Carlo campaigns: many seeded runs of one world on local worker processes or a Ray cluster, resumable, aggregated."""
+"""Monte Carlo campaigns: many seeded runs of one world on local worker processes or a Ray cluster, resumable,
+aggregated."""

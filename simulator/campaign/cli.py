@@ -1,6 +1,7 @@
 """The ``skytrack campaign`` subcommand.
 
-``skytrack campaign WORLD --runs N [--workers K] [--ray ADDRESS|auto] --out DIR [--seed S] [--duration D] [--set k=v ...]``
+``skytrack campaign WORLD --runs N [--workers K] [--ray ADDRESS|auto] --out DIR [--seed S] [--duration D] [--set k=v
+...]``
 
 Exit codes: 0 at least one run completed; 1 every run failed; 2 invalid input or a resume with other parameters (nothing
 was run); 130 interrupted (finished runs are kept: the same command resumes).

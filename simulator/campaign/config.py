@@ -129,7 +129,8 @@ class CampaignConfig:
     runs : int
         Number of runs ``N`` (indices ``0 .. N-1``).
     out_dir : Path
-        Campaign directory: ``campaign.json``, ``campaign.jsonl``, ``runs/run-NNNNN/``, ``summary.json``, ``summary.md``.
+        Campaign directory: ``campaign.json``, ``campaign.jsonl``, ``runs/run-NNNNN/``, ``summary.json``,
+        ``summary.md``.
     seed : int | None
         Campaign seed; None = the world's ``sim.seed``.
     duration_s : float | None

@@ -1,7 +1,8 @@
 """Run a Monte Carlo campaign: validate once, resume what is recorded, run the rest, aggregate.
 
 >>> from simulator.campaign.runner import CampaignConfig, run_campaign
->>> result = run_campaign(CampaignConfig(world="demo", runs=20, out_dir="runs/demo-mc", duration_s=30, workers=2))  # doctest: +SKIP
+>>> cfg = CampaignConfig(world="demo", runs=20, out_dir="runs/demo-mc", duration_s=30, workers=2)
+>>> result = run_campaign(cfg)  # doctest: +SKIP
 >>> result.summary.get("targets.car1.uav1.position_rmse_m").mean                                   # doctest: +SKIP
 
 Campaign directory::

@@ -23,6 +23,7 @@ def test_car_completes_random_route_through_helsinki(tmp_path):
 
     network = load_osm(resolve_map_path("helsinki.osm.pbf", result.out_dir)).network
     route = ["w166170099_0.f", *entered]
-    for a, b in zip(route, route[1:]):  # a continuous route: each road leaves the junction the previous one enters
+    # a continuous route: each road leaves the junction the previous one enters
+    for a, b in zip(route, route[1:], strict=False):
         assert b in network.successors(a), f"{b} does not follow {a}"
     assert np.all(np.abs(vt["z"]) < 1.5)  # on the ground: no flips, no sinking

@@ -47,7 +47,8 @@ def test_run_with_video_writes_an_mp4_of_the_whole_run(video_run):
 def test_render_subcommand_replays_a_recorded_run(video_run, tmp_path):
     _, out = video_run
     clip = tmp_path / "top.mp4"
-    code = main(["render", str(out), "--camera", "topdown", "--out", str(clip), "--start", "0.5", "--end", "1.5", *TINY])
+    code = main(["render", str(out), "--camera", "topdown", "--out", str(clip), "--start", "0.5", "--end", "1.5",
+                 *TINY])
     assert code == 0
     n, shape, _ = _frames(clip)
     assert shape == (96, 160) and abs(n - 10) <= 1

@@ -144,7 +144,8 @@ def test_bad_road_reference_names_the_key(tmp_path):
 
 
 def test_radio_channel_carries_team_state_and_outages(tmp_path):
-    """With the Rayleigh channel, team states go over the radio; a scheduled outage of the only link loses everything."""
+    """With the Rayleigh channel, team states go over the radio; a scheduled outage of the only link loses
+    everything."""
     cut = run("demo", duration=4.0, out_dir=tmp_path / "cut", overrides=[
         "comms.model=rayleigh", "comms.outages=[{link: [uav1, uav2], start_s: 0, end_s: 100}]"])
     c = cut.metrics["comms"]

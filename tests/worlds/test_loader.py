@@ -85,7 +85,8 @@ def test_missing_required_key(tmp_path):
 
 def test_override_sets_value_and_is_validated(tmp_path):
     path = write(tmp_path, GOOD)
-    loaded = load_world(path, ["sim.duration_s=30", "uavs[0].sensors[0].rate_hz=4", "uavs.0.initial.position=[1, 2, 3]"])
+    loaded = load_world(path, ["sim.duration_s=30", "uavs[0].sensors[0].rate_hz=4",
+                               "uavs.0.initial.position=[1, 2, 3]"])
     assert loaded.world.sim.duration_s == 30
     assert loaded.world.uavs[0].sensors[0].rate_hz == 4
     assert loaded.world.uavs[0].initial.position == (1, 2, 3)

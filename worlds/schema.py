@@ -192,7 +192,7 @@ class RadarSpec(SensorBase):
     type: Literal["radar"]
     sigma_range: PositiveFloat = Field(description="m")
     sigma_azimuth_deg: PositiveFloat
-    sigma_elevation_deg: PositiveFloat
+    sigma_elevation_deg: PositiveFloat | None = Field(None, description="omit for a 2-D radar (range, azimuth)")
     sigma_range_rate: PositiveFloat | None = Field(None, description="m/s; omit for no range-rate channel")
     fov: FovSpec | None = None
     max_range: PositiveFloat | None = Field(None, description="m")

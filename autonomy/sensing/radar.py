@@ -49,8 +49,9 @@ class RadarConfig:
         Range noise standard deviation (m).
     sigma_azimuth : float
         Azimuth noise standard deviation (rad).
-    sigma_elevation : float
-        Elevation noise standard deviation (rad).
+    sigma_elevation : float | None
+        Elevation noise standard deviation (rad); ``None``: a 2-D radar reporting (range, azimuth) only (papers 001
+        and 002), which needs no range-rate channel.
     sigma_range_rate : float | None
         Range-rate noise standard deviation (m/s); ``None``: range rate is not reported.
     rate_hz : float
@@ -79,7 +80,7 @@ class RadarConfig:
 
     sigma_range: float
     sigma_azimuth: float
-    sigma_elevation: float
+    sigma_elevation: float | None = None
     sigma_range_rate: float | None = None
     rate_hz: float = 2.0
     fov: FieldOfRegard = field(default_factory=FieldOfRegard)
@@ -94,9 +95,14 @@ class RadarConfig:
     latency_s: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("sigma_range", "sigma_azimuth", "sigma_elevation", "rate_hz", "max_range", "range_ref"):
+        for name in ("sigma_range", "sigma_azimuth", "rate_hz", "max_range", "range_ref"):
             if not (getattr(self, name) > 0):
                 raise ValueError(f"RadarConfig.{name} must be > 0, got {getattr(self, name)}")
+        if self.sigma_elevation is not None and not (self.sigma_elevation > 0):
+            raise ValueError(f"RadarConfig.sigma_elevation must be > 0 or None, got {self.sigma_elevation}")
+        if self.sigma_elevation is None and self.sigma_range_rate is not None:
+            raise ValueError("RadarConfig.sigma_range_rate needs the elevation channel (z = range, azimuth, "
+                             "elevation, range rate): give sigma_elevation too")
         if self.sigma_range_rate is not None and not (self.sigma_range_rate > 0):
             raise ValueError(f"RadarConfig.sigma_range_rate must be > 0 or None, got {self.sigma_range_rate}")
         if not (0 < self.pfa < self.pd_ref < 1):
@@ -112,8 +118,10 @@ class RadarConfig:
 
     @property
     def R(self) -> np.ndarray:
-        """Measurement noise covariance (m^2, rad^2, rad^2 (, m^2/s^2))."""
-        s = [self.sigma_range, self.sigma_azimuth, self.sigma_elevation]
+        """Measurement noise covariance (m^2, rad^2 (, rad^2 (, m^2/s^2)))."""
+        s = [self.sigma_range, self.sigma_azimuth]
+        if self.sigma_elevation is not None:
+            s.append(self.sigma_elevation)
         if self.sigma_range_rate is not None:
             s.append(self.sigma_range_rate)
         return np.diag(np.square(s))
@@ -167,7 +175,7 @@ class Radar(Sensor):
         d = p_W - pose.p_W
         r = np.linalg.norm(d, axis=1)
         az, el = azimuth_elevation(d)
-        cols = [r, az, el]
+        cols = [r, az] if self.config.sigma_elevation is None else [r, az, el]
         if self.config.sigma_range_rate is not None:
             cols.append(np.sum(d * (v_W - pose.v_W), axis=1) / np.maximum(r, 1e-9))
         return np.column_stack(cols)

@@ -221,8 +221,8 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         paper="002", title="Road-map-assisted standoff tracking with NMPC (Oh, Kim & Tsourdos, IEEE TAES 2015)",
         runs=len(idx),
         setup=f"""
-Physics world `{WORLD}` (see its header): two survey quadrotors with GMTI radars (UAV1 σ = 20 m / 7°, UAV2 30 m / 5°,
-2 Hz) and a sedan driving a seeded random walk with stop-and-go at junctions through a procedural 600 m × 600 m town
+Physics world `{WORLD}` (see its header): two survey quadrotors with 2-D GMTI radars (range and azimuth; UAV1
+σ = 20 m / 7°, UAV2 30 m / 5°, 2 Hz) and a sedan driving a seeded random walk with stop-and-go at junctions through a procedural 600 m × 600 m town
 with curved arterials; Singer target model (α = 0.6, σa = 0.66); state-vector (convex) fusion of the two UAVs'
 estimates; NMPC standoff guidance (or the Lyapunov vector field, LVFG) at 2 Hz with r_d = 150 m.
 {"Quick mode: " + str(QUICK_DURATION_S) + " s runs." if ctx.quick else "120 s per run."} Six campaigns
@@ -233,7 +233,8 @@ column; their run directories are kept under `campaigns/` beside this report.
         deviations=(
             "Quadrotors, not fixed-wing aircraft: standoff 150 m (paper 500 m), nominal speed 12 m/s (paper 40 m/s).",
             "The Devizes traffic data is not public: a procedural town and a physics car with a stop-and-go driver.",
-            "The radar measures elevation too (σ 1°), which the 2-D paper does not model; Pd 0.95, no clutter.",
+            "Radar: the paper's 2-D (range, azimuth) sensor with Pd 0.95 at 1 km and no clutter (the paper's "
+            "detection model is not given).",
             "Fused error is reported for the fused estimates each UAV keeps (the paper fuses once).",
             f"Run count: the paper uses 100 Monte Carlo runs; this report used {len(idx)}.",
         ))

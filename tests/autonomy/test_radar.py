@@ -259,3 +259,27 @@ def test_field_of_regard_wrapping_sector_and_body_frame():
     ahead = np.array([[1.0, 0.0, 0.0]])
     assert body.contains(ahead, R_WB)[0] and not body.contains(ahead, np.eye(3))[0]
     assert not heading.contains(ahead, R_WB)[0]
+
+
+def test_two_dimensional_radar_reports_range_and_azimuth_with_their_noise():
+    """Without an elevation channel (papers 001/002) z = (slant range, azimuth), with R = diag(σr², σaz²)."""
+    cfg = RadarConfig(sigma_range=20.0, sigma_azimuth=np.deg2rad(7.0), pd_ref=0.99, range_ref=5000.0,
+                      max_range=6000.0, min_detectable_velocity=0.0)
+    assert cfg.R.shape == (2, 2)
+    radar = Radar(cfg)
+    pose = SensorPose(p_W=[0.0, 0.0, 60.0])
+    tgt = one_target([150.0, 40.0, 0.0])
+    d = tgt.p_W[0] - pose.p_W
+    z_true = np.array([np.linalg.norm(d), np.arctan2(d[1], d[0])])
+    rng = np.random.default_rng(3)
+    res = []
+    for _ in range(600):
+        for det in radar.measure(0.0, pose, tgt, FakeScene(), rng).detections:
+            assert det.z.shape == (2,) and det.R.shape == (2, 2)
+            e = det.z - z_true
+            e[1] = wrap_angle(e[1])
+            res.append(e @ np.linalg.solve(cfg.R, e))
+    lo, hi = stats.chi2.interval(0.99, 2 * len(res))
+    assert lo <= np.sum(res) <= hi
+    with pytest.raises(ValueError, match="sigma_range_rate needs the elevation channel"):
+        RadarConfig(sigma_range=1.0, sigma_azimuth=0.01, sigma_range_rate=0.5)

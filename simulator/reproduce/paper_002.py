@@ -221,13 +221,14 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         paper="002", title="Road-map-assisted standoff tracking with NMPC (Oh, Kim & Tsourdos, IEEE TAES 2015)",
         runs=len(idx),
         setup=f"""
-Physics world `{WORLD}` (see its header): two survey quadrotors with 2-D GMTI radars (range and azimuth; UAV1
-σ = 20 m / 7°, UAV2 30 m / 5°, 2 Hz) and a sedan driving a seeded random walk with stop-and-go at junctions through a procedural 600 m × 600 m town
-with curved arterials; Singer target model (α = 0.6, σa = 0.66); state-vector (convex) fusion of the two UAVs'
-estimates; NMPC standoff guidance (or the Lyapunov vector field, LVFG) at 2 Hz with r_d = 150 m.
-{"Quick mode: " + str(QUICK_DURATION_S) + " s runs." if ctx.quick else "120 s per run."} Six campaigns
-(`skytrack campaign {WORLD} --set uavs[i].autonomy.estimator.type=… --set uavs[i].autonomy.guidance.type=…`), one per
-column; their run directories are kept under `campaigns/` beside this report.
+Physics world `{WORLD}` (see its header): two survey quadrotors with 2-D GMTI radars (range and azimuth; UAV1 σ =
+20 m / 7°, UAV2 30 m / 5°, 2 Hz) and a sedan driving a seeded random walk with stop-and-go at junctions through a
+procedural 600 m × 600 m town with curved arterials; Singer target model (α = 0.6, σa = 0.66); state-vector
+(convex) fusion of the two UAVs' estimates; NMPC standoff guidance (or the Lyapunov vector field, LVFG) at 2 Hz
+with r_d = 150 m. {"Quick mode: " + str(QUICK_DURATION_S) + " s runs." if ctx.quick else "120 s per run."} Six
+campaigns (`skytrack campaign {WORLD} --set uavs[i].autonomy.estimator.type=… --set
+uavs[i].autonomy.guidance.type=…`), one per column; their run directories are kept under `campaigns/` beside this
+report.
 """,
         tables=(t2, t3, t4), figures=(_figure(ctx, cols_p, stand),), findings=tuple(findings),
         deviations=(

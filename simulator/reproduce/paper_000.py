@@ -125,7 +125,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
                rows=(("consensus error (m)", mean_ci(cons_out).text(), mean_ci(cons_in).text()),
                      ("position error (m)", mean_ci(err_out).text(), mean_ci(err_in).text())))
     t3 = Table(title="Computation per UAV per step: fast MPC + SCIF information step + its share of HCMCI",
-               columns=("case", "paper (ms)", "ours, median (ms)", "issue target (ms)"),
+               columns=("case", "paper (ms)", "ours, median (ms)", "project target (ms)"),
                rows=tuple((str(c), f"{PAPER_STEP_MS:.1f}", mean_ci(step_ms[c]).text(), "≤ 2") for c in (1, 2)),
                note="Wall time on this machine (2 shared cores), this process; the paper's figure is for MATLAB on "
                     "a 2.7 GHz Pentium.")
@@ -169,7 +169,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
     findings.append(Finding(
         claim=f"The whole loop runs in real time (paper ≈ {PAPER_STEP_MS:.0f} ms per UAV per step)",
         verdict="reproduced" if ms.mean < PAPER_STEP_MS else "not reproduced",
-        why=f"ours {ms.text()} ms per UAV per step (median over steps); T = 0.5 s. The issue's 2 ms target is "
+        why=f"ours {ms.text()} ms per UAV per step (median over steps); T = 0.5 s. The project's 2 ms target is "
             f"{'met' if ms.mean <= 2.0 else 'not met'}"))
 
     return PaperReport(

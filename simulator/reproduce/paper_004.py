@@ -156,7 +156,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         why=(f"φ(X̄)/φ(X0) at step {mid}: {xb.text()}; emptied (< {EMPTY:g}) in {emptied('mpc')}. "
              + ("" if xb.mean < 0.05 else "Regrowth outruns clearing: X̄ is dilated by 1.39 m per step along its "
                 "whole boundary, and our one-step sequential MPC sweeps cleared stripes that refill from their "
-                "edges; the paper's planner evidently clears contiguously. Open: see the project's issue notes.")
+                "edges; the paper's planner evidently clears contiguously. An open problem of our planner.")
              if mid == 300 else "the shortened missions end before step 300")))
     findings.append(Finding(
         claim="The search MPC shrinks X̄ faster than undirected flight",

@@ -117,6 +117,7 @@ class MetricsTracker:
                 s = stats.summary()
                 m.update(solver_calls=s.get("solves", 0), solver_failures=s.get("failures", 0),
                          solver_fallbacks=s.get("fallbacks_shifted", 0) + s.get("fallbacks_vector_field", 0),
+                         solver_retries=s.get("retries", 0),
                          solve_ms_p50=s.get("solve_ms_p50"), solve_ms_p95=s.get("solve_ms_p95"))
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))

@@ -38,6 +38,8 @@ class GuidanceStats:
         Solves stopped by the iteration cap whose iterate was feasible and was used.
     overruns : int
         Solves whose wall time exceeded the configured budget.
+    retries : int
+        Failed fast solves retried with a more robust solver (a retry that succeeds is not a failure).
     solve_times_s : list[float]
         Wall time of every optimiser call (s).
     solve_cpu_times_s : list[float]
@@ -55,6 +57,7 @@ class GuidanceStats:
     fallbacks_vector_field: int = 0
     inexact: int = 0
     overruns: int = 0
+    retries: int = 0
     solve_times_s: list[float] = field(default_factory=list)
     solve_cpu_times_s: list[float] = field(default_factory=list)
     iterations: list[int] = field(default_factory=list)
@@ -81,6 +84,7 @@ class GuidanceStats:
             "fallbacks_vector_field": self.fallbacks_vector_field,
             "inexact": self.inexact,
             "overruns": self.overruns,
+            "retries": self.retries,
             "solve_ms_p50": 1e3 * self.solve_time_percentile(50),
             "solve_ms_p95": 1e3 * self.solve_time_percentile(95),
             "solve_ms_max": 1e3 * (max(self.solve_times_s) if self.solve_times_s else float("nan")),

@@ -262,6 +262,10 @@ class NmpcStandoffGuidance(Guidance):
             self._inject -= 1
         else:
             ok, t_solve, status = self._solve(x0, par, t, target, teammates)
+            if not ok and c.robust_retry and self._w0 is not None and c.solver != "ipopt":
+                self.stats.retries += 1
+                ok, t_retry, status = self._solve(x0, par, t, target, teammates, robust=True)
+                t_solve += t_retry
         self.stats.solves += 1
         self.stats.solve_times_s.append(t_solve)
         self.stats.last_status = status
@@ -348,17 +352,18 @@ class NmpcStandoffGuidance(Guidance):
         return np.maximum(0.0, -gv.min(axis=1))
 
     def _solve(self, x0: np.ndarray, par: np.ndarray, t: float, target: TargetEstimate,
-               teammates: Sequence[TeammateState]) -> tuple[bool, float, str]:
-        """Run the solver warm-started from the shifted previous plan; store the plan on success."""
+               teammates: Sequence[TeammateState], robust: bool = False) -> tuple[bool, float, str]:
+        """Run the solver warm-started from the shifted previous plan; store the plan on success. ``robust`` uses
+        the exact-Hessian IPOPT of cold starts from the same guess."""
         c = self.config
         n = c.horizon
         w0 = self._initial_guess(x0, t, target, teammates)
         w0[-n:] = self._feasible_slacks(w0, par)
         args = {"x0": w0, "p": par, "lbx": self._lbx, "ubx": self._ubx, "lbg": self._lbg, "ubg": self._ubg}
-        if self._lam_g0 is not None:
+        if self._lam_g0 is not None and not robust:
             args["lam_g0"], args["lam_x0"] = self._lam_g0, self._lam_x0
         # a cold start (no plan to shift) goes to the robust exact-Hessian IPOPT, warm starts to the fast solver
-        solver = self._cold_solver if self._w0 is None else self._solver
+        solver = self._cold_solver if self._w0 is None or robust else self._solver
         t0, c0 = time.perf_counter(), time.thread_time()
         try:
             sol = solver(**args)

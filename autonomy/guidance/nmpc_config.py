@@ -101,6 +101,10 @@ class NmpcConfig:
         Iteration cap of the solver (the deterministic time-out), >= 1.
     cold_start_max_iter : int
         Iteration cap of the exact-Hessian IPOPT used for cold starts (no previous plan), >= 1.
+    robust_retry : bool
+        When the warm-started fast solver fails, solve once more from the same guess with the exact-Hessian IPOPT of
+        cold starts before falling back (slower, counted in ``retries``). Measured in ``road_standoff`` (seed 2,
+        40 s, town keep-outs): the SQP hit its iteration cap on 37 of 158 solves; IPOPT solved all 37 (median 24 ms).
     time_budget_s : float
         Wall-time budget of one solve (s); overruns are counted, and treated as failures if ``enforce_time_budget``.
     enforce_time_budget : bool
@@ -135,6 +139,7 @@ class NmpcConfig:
     solver: Literal["sqp", "ipopt", "rti"] = "sqp"
     max_iter: int = 30
     cold_start_max_iter: int = 200
+    robust_retry: bool = True
     time_budget_s: float = 0.02
     enforce_time_budget: bool = False
     fallback_max_shift: int = 10

@@ -114,3 +114,27 @@ def test_called_faster_than_its_step():
     res = run_kinematic_loop(laws, x0, LoopConfig(dt=0.1, steps=900, target_v=(3.0, 0.0)))
     assert np.abs(res.ranges[-300:, 0] - RD).max() < 0.02 * RD
     assert laws[0].stats.failures <= 0.01 * laws[0].stats.calls and laws[0].stats.fallbacks_vector_field == 0
+
+
+class _Broken:
+    """A fast solver that fails every call the way CasADi reports an evaluation error."""
+
+    def __call__(self, **kwargs):
+        raise RuntimeError("evaluation failed")
+
+    def stats(self):
+        return {}
+
+
+@pytest.mark.parametrize("retry", [True, False])
+def test_failed_fast_solve_is_retried_with_the_robust_solver(retry):
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, robust_retry=retry), 0)
+    g.command(*_states(0.0), 0.0)  # cold start (IPOPT) gives a plan to warm-start from
+    g._solver = _Broken()
+    sp = g.command(*_states(0.5), 0.5)
+    assert g.stats.retries == (1 if retry else 0)
+    assert g.stats.failures == (0 if retry else 1) and g.stats.fallbacks_shifted == (0 if retry else 1)
+    assert np.isfinite(sp.speed) and np.isfinite(sp.heading_rate)
+    if retry:  # the command is the robust solve's first input, not a shifted plan
+        np.testing.assert_allclose([sp.speed, sp.heading_rate], g._plan_u[0])
+        assert g._plan_t == 0.5

@@ -215,7 +215,10 @@ class Assembly:
                                  z0=z[0], z1=z[1], z2=z[2], z3=z[3])
 
     def _record_agent(self, tick: int, t: float, uav: int, result: Any) -> None:
-        self.recorder.append("estimates", **_estimate_row(tick, t, uav, result.local_estimate, result.used_detections))
+        estimator = self.agents[uav].agent.estimator
+        road = (getattr(estimator, "road_id", None) or "") if getattr(estimator, "on_road", False) else ""
+        self.recorder.append("estimates", **_estimate_row(tick, t, uav, result.local_estimate, result.used_detections,
+                                                          str(road)))
         if self.agents[uav].agent.fusion is not None:
             self.recorder.append("fused_estimates", **_estimate_row(tick, t, uav, result.estimate, 0))
         sp = result.setpoint
@@ -261,10 +264,12 @@ class Assembly:
         self.scene.close()
 
 
-def _estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used: int) -> dict:
+def _estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used: int, road: str = "") -> dict:
+    """One row of ``estimates``; ``road`` is the road a road-constrained estimator holds the target on ("" off the
+    map or for unconstrained estimators)."""
     row = {"tick": tick, "t": t, "uav": uav, "valid": est is not None, "x": np.nan, "y": np.nan,
            "vx": np.nan, "vy": np.nan, "pxx": np.nan, "pxy": np.nan, "pyy": np.nan, "pvxvx": np.nan,
-           "pvyvy": np.nan, "detections": used}
+           "pvyvy": np.nan, "detections": used, "road": road}
     if est is not None:
         row.update(x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0], vy=est.v_W[1])
         if est.P is not None:

@@ -24,11 +24,12 @@ _COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "ta
 def write_geometry(out_dir: Path, buildings: list, network: object | None) -> None:
     """Store building footprints and road centre-lines in ``geometry.npz`` for plots and renderers."""
     fps = [np.asarray(b.footprint) for b in buildings]
-    roads = []
+    roads, road_ids = [], []
     if network is not None:
-        for road in network.roads.values():
+        for rid, road in network.roads.items():
             s = np.linspace(0.0, road.length, max(2, int(road.length / 5.0) + 1))
             roads.append(np.asarray(road.point(s)))
+            road_ids.append(str(rid))
     def pack(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         if not polys:
             return np.zeros((0, 2)), np.zeros(1, dtype=int)
@@ -36,7 +37,7 @@ def write_geometry(out_dir: Path, buildings: list, network: object | None) -> No
     bv, bo = pack(fps)
     rv, ro = pack(roads)
     np.savez(Path(out_dir) / "geometry.npz", building_xy=bv, building_offsets=bo, road_xy=rv, road_offsets=ro,
-             building_height=np.array([b.height for b in buildings]))
+             road_ids=np.array(road_ids, dtype=str), building_height=np.array([b.height for b in buildings]))
 
 
 def _unpack(xy: np.ndarray, offsets: np.ndarray) -> list[np.ndarray]:

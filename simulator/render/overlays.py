@@ -62,7 +62,8 @@ class OverlayFrame:
     ``target_W`` is the true target (3,) m; ``trails`` (colour, points (K, 3) m) per UAV; ``scan_rgb`` the colour of
     each UAV's detections; ``uavs`` (colour, name, p_W (3,) m) ringed and labelled; ``ground_z`` the height (m) at
     which the 2D estimates, ellipses and standoff circles are drawn; ``regards`` (colour, closed ground outline
-    (K, 3) m) the radars' fields of regard; ``links`` (p_a, p_b, delivery probability) the radio links.
+    (K, 3) m) the radars' fields of regard; ``links`` (p_a, p_b, delivery probability) the radio links;
+    ``constrained_roads`` (colour, centre-line (K, 3) m) the road each road-constrained estimator holds the target on.
     """
 
     target_W: np.ndarray | None
@@ -73,6 +74,7 @@ class OverlayFrame:
     uavs: list[tuple[tuple[float, float, float], str, np.ndarray]] = field(default_factory=list)
     ground_z: float = 0.0
     regards: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
+    constrained_roads: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
     links: list[tuple[np.ndarray, np.ndarray, float]] = field(default_factory=list)
 
 
@@ -117,6 +119,8 @@ def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame) -> Non
     s = max(1, int(round(h / 360)))  # line scale for the image size
     for rgb, pts in frame.regards:
         _polyline(img, view, pts, rgb255(tuple(0.55 * c + 0.45 for c in rgb)), 1, closed=True)
+    for rgb, pts in frame.constrained_roads:
+        _polyline(img, view, pts, rgb255(rgb), 3 * s, closed=False)
     for a_W, b_W, pr in frame.links:
         _polyline(img, view, np.vstack([a_W, b_W]), rgb255(probability_rgb(pr)), s, closed=False)
     for rgb, pts in frame.trails:
@@ -174,7 +178,8 @@ LEGEND = (("white brackets: true target   x: estimate   ellipse around it: 2-sig
            (0.9, 0.9, 0.9)),
           ("filled dots: radar detections of the last scan   yellow rings: clutter   lines: UAV trails",
            (0.9, 0.9, 0.9)),
-          ("pale outline: radar field of regard   UAV-to-UAV line: radio link, red (Pr 0) to green (Pr 1)",
+          ("pale outline: radar field of regard   UAV-to-UAV line: radio link, red (Pr 0) to green (Pr 1)   "
+           "thick road line: road the filter is constrained to",
            (0.9, 0.9, 0.9)))
 
 

@@ -260,7 +260,17 @@ class Replayer:
                             uavs=[(UAV_COLORS[u % len(UAV_COLORS)], self.uav_names[u], tl.uavs[u].at(t)[0])
                                   for u in self.uav_index],
                             ground_z=float(p_t[2]), regards=self._regard_marks(t, float(p_t[2])),
-                            links=self._link_marks(t))
+                            links=self._link_marks(t), constrained_roads=self._road_marks(t, float(p_t[2])))
+
+    def _road_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
+        index = {rid: k for k, rid in enumerate(self.geometry.road_ids) if rid}
+        marks = []
+        for u, est in sorted(self.timeline.estimates.items()):
+            k = index.get(est.road_at(t))
+            if k is not None:
+                line = self.geometry.roads[k][:, :2]
+                marks.append((UAV_COLORS[u % len(UAV_COLORS)], np.c_[line, np.full(len(line), z + 0.3)]))
+        return marks
 
     def _regard_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
         marks = []

@@ -75,9 +75,10 @@ def ground_mask(view: CameraView, width: int, height: int, aspect: float) -> np.
 class StaticGeometry:
     """Buildings and road centre-lines of a run (``geometry.npz``)."""
 
-    def __init__(self, buildings: list[Building], roads: list[np.ndarray]) -> None:
+    def __init__(self, buildings: list[Building], roads: list[np.ndarray], road_ids: list[str] | None = None) -> None:
         self.buildings = buildings
         self.roads = roads
+        self.road_ids = list(road_ids) if road_ids is not None else [""] * len(roads)
 
     def bounds(self) -> tuple[float, float, float, float] | None:
         """(xmin, xmax, ymin, ymax) of all buildings and roads, m; None if there are none."""
@@ -103,6 +104,7 @@ def load_geometry(path: Path) -> StaticGeometry:
     with np.load(path) as g:
         bxy, bo, heights = g["building_xy"], g["building_offsets"], g["building_height"]
         rxy, ro = g["road_xy"], g["road_offsets"]
+        ids = [str(r) for r in g["road_ids"]] if "road_ids" in g.files else None
     buildings = []
     for i in range(len(bo) - 1):
         fp = bxy[bo[i]:bo[i + 1]]
@@ -114,7 +116,7 @@ def load_geometry(path: Path) -> StaticGeometry:
         else:
             buildings.append(Building(footprint=fp, height=h))
     roads = [rxy[ro[i]:ro[i + 1]] for i in range(len(ro) - 1)]
-    return StaticGeometry(buildings, roads)
+    return StaticGeometry(buildings, roads, ids)
 
 
 def ribbon_mesh(polylines: Sequence[np.ndarray], half_width: float, z: float) -> trimesh.Trimesh | None:

@@ -69,6 +69,14 @@ class EstimateTrack:
     xy: np.ndarray
     P_xy: np.ndarray
     valid: np.ndarray
+    road: np.ndarray | None = None
+
+    def road_at(self, t: float) -> str:
+        """Road the estimator held the target on at the last estimate at or before ``t`` s ("" if none)."""
+        k = int(np.searchsorted(self.t, t + 1e-9, side="right")) - 1
+        if self.road is None or k < 0 or not self.valid[k]:
+            return ""
+        return str(self.road[k])
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
         """(xy (2,), P_xy (2, 2)) of the last valid estimate at or before ``t`` s, or None if there is none yet."""
@@ -126,7 +134,8 @@ class Timeline:
         if "estimates" in streams and len(streams["estimates"].get("t", ())):
             for u, d in _group(streams["estimates"], "uav").items():
                 P = np.stack([np.c_[d["pxx"], d["pxy"]], np.c_[d["pxy"], d["pyy"]]], axis=1)
-                self.estimates[u] = EstimateTrack(d["t"], np.c_[d["x"], d["y"]], P, d["valid"].astype(bool))
+                self.estimates[u] = EstimateTrack(d["t"], np.c_[d["x"], d["y"]], P, d["valid"].astype(bool),
+                                                  d.get("road"))
         self._det = None
         det = streams.get("detections")
         if det is not None and len(det.get("t_meas", ())):

@@ -43,3 +43,27 @@ def test_road_estimator_without_roads_is_rejected_with_its_key_path(tmp_path):
         load_world(path)
     assert "uavs[0].autonomy.estimator.type = 'maekf'" in str(info.value)
     assert "this world has no roads" in str(info.value)
+
+
+def test_record_and_video_show_the_road_the_filter_is_constrained_to(tmp_path):
+    from simulator.render.config import RenderConfig
+    from simulator.render.replay import Replayer
+    from simulator.render.stage import load_geometry
+
+    sets = [f"uavs[{i}].autonomy.estimator.type=maekf" for i in (0, 1)]
+    res = run("road_standoff", duration=10.0, seed=3, out_dir=tmp_path, overrides=sets)
+    est = res.stream("estimates", uav=0)
+    on_road = est["road"] != ""
+    assert on_road.mean() > 0.5
+    geometry = load_geometry(tmp_path / "geometry.npz")
+    assert set(est["road"][on_road]) <= set(geometry.road_ids)
+    # the estimate lies near the centre-line of the road it is constrained to
+    k = int(np.flatnonzero(on_road)[-1])
+    line = geometry.roads[geometry.road_ids.index(est["road"][k])]
+    assert np.min(np.hypot(line[:, 0] - est["x"][k], line[:, 1] - est["y"][k])) < 10.0
+    rep = Replayer(tmp_path, RenderConfig(width=64, height=48, renderer="tiny", progress=False))
+    try:
+        marks = rep.overlay_frame(float(est["t"][k])).constrained_roads
+    finally:
+        rep.close()
+    assert len(marks) >= 1 and np.allclose(marks[0][1][:, :2], line[:, :2])  # UAV 0's mark comes first

@@ -30,7 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
+from scipy.linalg.lapack import dpotrf, dpotrs
 
 __all__ = ["PdipOptions", "QpResult", "solve_qp_pdip"]
 
@@ -86,9 +86,34 @@ class QpResult:
     residual: float
 
 
+def cho_factor(A: np.ndarray) -> np.ndarray:
+    """Upper Cholesky factor of the symmetric positive definite ``A`` straight from LAPACK ``dpotrf`` (the matrices
+    are tiny and factorised hundreds of times per second: scipy's checking wrappers cost more than the work).
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        ``A`` is not (numerically) positive definite.
+    """
+    c, info = dpotrf(A, lower=0, clean=0, overwrite_a=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dpotrf failed with info = {info}")
+    return c
+
+
+def cho_solve(c: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A⁻¹ B`` from the factor of :func:`cho_factor` (LAPACK ``dpotrs``)."""
+    x, info = dpotrs(c, B, lower=0)
+    if info != 0:  # pragma: no cover - only for invalid arguments
+        raise ValueError(f"dpotrs failed with info = {info}")
+    return x
+
+
 def _max_step(v: np.ndarray, dv: np.ndarray) -> float:
-    neg = dv < 0
-    return float(np.min(-v[neg] / dv[neg])) if np.any(neg) else np.inf
+    """Largest step ``a`` with ``v + a dv >= 0`` (inf when no component decreases)."""
+    if not v.size:
+        return np.inf
+    return float(np.divide(-v, dv, out=np.full(v.shape, np.inf), where=dv < 0).min())
 
 
 def solve_qp_pdip(H: np.ndarray, f: np.ndarray, C: np.ndarray, b: np.ndarray, P: np.ndarray, m: np.ndarray,

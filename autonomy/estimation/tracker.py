@@ -55,9 +55,11 @@ class TrackerConfig:
     lost_after_s : float
         Drop the track after this long without a gated detection (s), > 0.
     max_missed_scans : int
-        Drop the track after this many consecutive scans with detections that all fall outside the gate, >= 1: a
-        track that rejects everything it is shown has diverged (e.g. a bad two-point velocity) and is re-initiated
-        from the new fixes instead of coasting for ``lost_after_s``.
+        Drop the track after this many consecutive position-fixing scans (radar, box) whose detections all fall
+        outside the gate, >= 1: a track that rejects every fix it is shown has diverged (e.g. a bad two-point
+        velocity, or a track started on clutter) and is re-initiated from the new fixes instead of coasting for
+        ``lost_after_s``. Bearing-only scans neither count nor reset the count: a bearing fits a wrong track
+        anywhere along its line.
     initial_speed_sigma : float | None
         Standard deviation (m/s) of a zero-mean prior on each velocity component, fused with the two-point velocity
         at initiation (None: the two-point velocity alone). Two fixes 0.5 s apart with 30 m range noise give a
@@ -224,9 +226,11 @@ class SingleTargetTracker:
                 gate = self._gate(np.size(d.z))
                 if nis <= gate and nis < best_nis:
                     best, best_nis = d, nis
+            fixing = any(_ground_fix(d, self.config.target_height) is not None for d in dets)
             if best is None:
                 self.gated_out += len(dets)
-                self._missed += 1
+                # only scans that fix a position (radar, box) judge divergence: a bearing fits any range on its line
+                self._missed += fixing
                 if self._missed >= self.config.max_missed_scans:  # diverged: start again from these fixes
                     self.filter = None
                     self.dropped_diverged += 1
@@ -234,7 +238,8 @@ class SingleTargetTracker:
                     self._initiate(dets)
                 continue
             self.filter.update(best)
-            self._missed = 0
+            if _ground_fix(best, self.config.target_height) is not None:
+                self._missed = 0
             self.updates += 1
             self.last_update_t = t_meas
         if self.filter is None:

@@ -47,3 +47,17 @@ def test_bad_settings_are_named():
         TrackerConfig(max_missed_scans=0)
     with pytest.raises(ValueError, match="initial_speed_sigma"):
         TrackerConfig(initial_speed_sigma=-1.0)
+
+
+def test_bearings_on_the_same_line_do_not_keep_a_diverged_track_alive():
+    tr = SingleTargetTracker(TrackerConfig(max_missed_scans=3, lost_after_s=100.0))
+    for k in range(6):  # a wrong track at (300, 0) on the line of sight from the sensor at the origin
+        tr.step(0.5 * k, [_box([300.0, 0.0], 0.5 * k, 2.0)])
+    true_xy = np.array([100.0, 0.0])  # the car is on the same line, closer
+    for k in range(6, 14):
+        t = 0.5 * k
+        bearing = Detection(z=np.array([0.0]), R=np.array([[1e-4]]), t_meas=t, t_arrival=t, sensor_id="cam",
+                            p_sensor_W=np.array([0.0, 0.0, 0.0]), kind="bearing")
+        tr.step(t, [_box(true_xy, t, 2.0), bearing])
+    assert tr.dropped_diverged == 1
+    assert np.linalg.norm(tr.filter.x[tr._ix] - true_xy) < 10.0

@@ -60,6 +60,12 @@ class TrackerConfig:
         velocity, or a track started on clutter) and is re-initiated from the new fixes instead of coasting for
         ``lost_after_s``. Bearing-only scans neither count nor reset the count: a bearing fits a wrong track
         anywhere along its line.
+    confirm_fixes : int
+        Position fixes that confirm a track, 2 or 3: two fixes within ``max_target_speed · Δt`` (plus 3σ) of each
+        other, or additionally a third fix where that pair predicts (within 3σ plus ``max_target_accel · Δt² / 2``).
+        Three suppress tracks started on pairs of false alarms in clutter, at the cost of one more scan.
+    max_target_accel : float
+        Largest plausible target acceleration (m/s²), > 0: widens the third fix's gate.
     initial_speed_sigma : float | None
         Standard deviation (m/s) of a zero-mean prior on each velocity component, fused with the two-point velocity
         at initiation (None: the two-point velocity alone). Two fixes 0.5 s apart with 30 m range noise give a
@@ -78,6 +84,8 @@ class TrackerConfig:
     tentative_window_s: float = 3.0
     lost_after_s: float = 10.0
     max_missed_scans: int = 4
+    confirm_fixes: int = 2
+    max_target_accel: float = 4.0
     initial_speed_sigma: float | None = 15.0
     target_height: float = 0.0
 
@@ -89,6 +97,10 @@ class TrackerConfig:
         for name in ("q", "singer_alpha", "singer_sigma_a", "max_target_speed", "tentative_window_s", "lost_after_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if self.confirm_fixes not in (2, 3):
+            raise ValueError(f"TrackerConfig.confirm_fixes must be 2 or 3, got {self.confirm_fixes!r}")
+        if not self.max_target_accel > 0:
+            raise ValueError(f"TrackerConfig.max_target_accel must be > 0 m/s², got {self.max_target_accel!r}")
         if int(self.max_missed_scans) != self.max_missed_scans or self.max_missed_scans < 1:
             raise ValueError(f"TrackerConfig.max_missed_scans must be an integer >= 1, got {self.max_missed_scans!r}")
         if self.initial_speed_sigma is not None and not self.initial_speed_sigma > 0:
@@ -143,7 +155,8 @@ class SingleTargetTracker:
         self.dropped_diverged = 0
         self._missed = 0
         self._gates: dict[int, float] = {}
-        self._tentative: list[tuple[float, np.ndarray, np.ndarray]] = []
+        # tentative fixes (t, xy, P_xy) and, with confirm_fixes = 3, tentative pairs (t, xy, P_xy, v, P_v)
+        self._tentative: list[tuple] = []
 
     def _initiate(self, dets: Sequence[object]) -> bool:
         """Try to confirm a track from this scan's fixes and the tentative fixes of earlier scans; keep the new
@@ -154,16 +167,28 @@ class SingleTargetTracker:
             return False
         t_now = fixes[0][0].t_meas
         self._tentative = [tf for tf in self._tentative if 0 < t_now - tf[0] <= cfg.tentative_window_s]
-        best = None
+        best, pairs = None, []
         for det, (xy, Pxy) in fixes:
-            for t_old, xy_old, P_old in self._tentative:
+            for t_old, xy_old, P_old, *vel in self._tentative:
                 dt = t_now - t_old
-                gap = float(np.linalg.norm(xy - xy_old))
-                margin = 3.0 * float(np.sqrt(np.linalg.eigvalsh(Pxy + P_old).max()))
-                if gap <= cfg.max_target_speed * dt + margin and (best is None or gap < best[0]):
-                    best = (gap, det, xy, Pxy, (xy - xy_old) / dt, (Pxy + P_old) / dt ** 2)
+                v, Pv = (xy - xy_old) / dt, (Pxy + P_old) / dt ** 2
+                if vel:  # a pair: does this fix lie where it predicts?
+                    v_old, Pv_old = vel
+                    gap = float(np.linalg.norm(xy - xy_old - v_old * dt))
+                    margin = (3.0 * float(np.sqrt(np.linalg.eigvalsh(Pxy + P_old + dt ** 2 * Pv_old).max()))
+                              + 0.5 * cfg.max_target_accel * dt ** 2)
+                    ok = gap <= margin
+                else:
+                    gap = float(np.linalg.norm(xy - xy_old))
+                    ok = gap <= cfg.max_target_speed * dt + 3.0 * float(np.sqrt(np.linalg.eigvalsh(Pxy + P_old).max()))
+                    if ok and cfg.confirm_fixes == 3:
+                        pairs.append((t_now, xy, Pxy, v, Pv))
+                        ok = False
+                if ok and (best is None or gap < best[0]):
+                    best = (gap, det, xy, Pxy, v, Pv)
         if best is None:
             self._tentative.extend((t_now, xy, Pxy) for _, (xy, Pxy) in fixes)
+            self._tentative.extend(pairs)
             return False
         _, det, xy, Pxy, v, Pv = best
         if cfg.initial_speed_sigma is not None:  # fuse with the zero-mean speed prior N(0, σ² I)

@@ -61,3 +61,21 @@ def test_bearings_on_the_same_line_do_not_keep_a_diverged_track_alive():
         tr.step(t, [_box(true_xy, t, 2.0), bearing])
     assert tr.dropped_diverged == 1
     assert np.linalg.norm(tr.filter.x[tr._ix] - true_xy) < 10.0
+
+
+def test_three_fix_confirmation_ignores_false_alarm_pairs_and_confirms_a_consistent_third_fix():
+    cfg = TrackerConfig(confirm_fixes=3, max_target_speed=30.0)
+    tr = SingleTargetTracker(cfg)
+    tr.step(0.0, [_box([500.0, 0.0], 0.0, 3.0)])
+    tr.step(0.5, [_box([505.0, 0.0], 0.5, 3.0)])  # a pair two fixes make: enough for confirm_fixes = 2, not here
+    assert tr.filter is None
+    tr.step(1.0, [_box([900.0, 400.0], 1.0, 3.0)])  # nowhere near where the pair predicts
+    assert tr.filter is None
+    tr.step(1.5, [_box([515.0, 0.0], 1.5, 3.0)])  # 10 m/s from (505, 0) at t = 0.5: the pair's prediction
+    assert tr.filter is not None and tr.initiations == 1
+    two = SingleTargetTracker(TrackerConfig(confirm_fixes=2))
+    two.step(0.0, [_box([500.0, 0.0], 0.0, 3.0)])
+    two.step(0.5, [_box([505.0, 0.0], 0.5, 3.0)])
+    assert two.filter is not None
+    with pytest.raises(ValueError, match="confirm_fixes"):
+        TrackerConfig(confirm_fixes=4)

@@ -6,8 +6,6 @@ case once; its results are qualitative and shown in figures only).
 
 from __future__ import annotations
 
-import concurrent.futures as cf
-import os
 
 import numpy as np
 
@@ -30,12 +28,7 @@ def _one(args: tuple[int, int, int]) -> ConsensusLoopResult:
 def _run_all(ctx: ReproContext) -> dict[int, list[ConsensusLoopResult]]:
     steps = QUICK_STEPS if ctx.quick else ConsensusLoopConfig().steps
     jobs = [(case, ctx.seed * 100_003 + r, steps) for case in (1, 2) for r in range(ctx.runs)]
-    workers = ctx.workers or os.cpu_count() or 1
-    if workers == 1 or len(jobs) == 1:
-        results = [_one(j) for j in jobs]
-    else:
-        with cf.ProcessPoolExecutor(min(workers, len(jobs))) as pool:
-            results = list(pool.map(_one, jobs))
+    results = ctx.map(_one, jobs)
     out: dict[int, list[ConsensusLoopResult]] = {1: [], 2: []}
     for (case, _, _), res in zip(jobs, results, strict=True):
         out[case].append(res)

@@ -9,8 +9,6 @@ route probability β) to its own prediction. Errors are means of ‖p̂ − p‖
 
 from __future__ import annotations
 
-import concurrent.futures as cf
-import os
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -141,11 +139,7 @@ def _jobs(ctx: ReproContext) -> list[_Job]:
 
 def _run_all(ctx: ReproContext) -> list[_Out]:
     jobs = _jobs(ctx)
-    workers = ctx.workers or os.cpu_count() or 1
-    if workers == 1:
-        return [_one(j) for j in jobs]
-    with cf.ProcessPoolExecutor(workers) as pool:
-        return list(pool.map(_one, jobs, chunksize=2))
+    return ctx.map(_one, jobs, chunksize=2)
 
 
 def _roles(res: InfoLoopResult) -> list[str]:

@@ -9,8 +9,6 @@ non-optimal formation, which the notes ask us to do.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
-import os
 import numpy as np
 
 from autonomy.guidance.formation.closed_loop import CASES, FormationLoopConfig, FormationLoopResult, run_formation_loop
@@ -32,12 +30,7 @@ def _one(args: tuple[int, str, int, bool]) -> FormationLoopResult:
 def _run_all(ctx: ReproContext) -> dict[tuple[int, str], list[FormationLoopResult]]:
     jobs = [(case, form, ctx.seed * 100_003 + r, ctx.quick) for case in CASES for form in FORMATIONS
             for r in range(ctx.runs)]
-    workers = ctx.workers or os.cpu_count() or 1
-    if workers == 1 or ctx.quick:
-        results = [_one(j) for j in jobs]
-    else:
-        with cf.ProcessPoolExecutor(workers) as pool:
-            results = list(pool.map(_one, jobs, chunksize=4))
+    results = ctx.map(_one, jobs, chunksize=4)
     out: dict[tuple[int, str], list[FormationLoopResult]] = {}
     for (case, form, _, _), res in zip(jobs, results, strict=True):
         out.setdefault((case, form), []).append(res)

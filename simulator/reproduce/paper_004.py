@@ -7,8 +7,6 @@ and, as a baseline, with random turns, each run's world drawn from its own seed.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
-import os
 import time
 from dataclasses import dataclass
 
@@ -41,12 +39,7 @@ def _one(args: tuple[str, int, bool]) -> _Run:
 
 def _run_all(ctx: ReproContext) -> dict[str, list[_Run]]:
     jobs = [(control, ctx.seed * 100_003 + r, ctx.quick) for control in ("mpc", "random") for r in range(ctx.runs)]
-    workers = ctx.workers or os.cpu_count() or 1
-    if workers == 1 or len(jobs) == 1:
-        results = [_one(j) for j in jobs]
-    else:
-        with cf.ProcessPoolExecutor(min(workers, len(jobs))) as pool:
-            results = list(pool.map(_one, jobs))
+    results = ctx.map(_one, jobs)
     out: dict[str, list[_Run]] = {"mpc": [], "random": []}
     for (control, _, _), res in zip(jobs, results, strict=True):
         out[control].append(res)

@@ -11,16 +11,21 @@ paper's own figures, which are quoted as the paper prints them.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import math
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 from scipy import stats
 
 from simulator.record import atomic_write_text
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 __all__ = ["Verdict", "Finding", "Table", "Figure", "PaperReport", "ReproContext", "MeanCI", "mean_ci",
            "write_paper_report", "paper_markdown"]
@@ -140,6 +145,15 @@ class ReproContext:
     def __post_init__(self) -> None:
         if self.runs < 1:
             raise ValueError(f"ReproContext.runs must be >= 1, got {self.runs}")
+
+    def map(self, fn: Callable[[T], R], jobs: Sequence[T], chunksize: int = 1) -> list[R]:
+        """``[fn(j) for j in jobs]``, on a pool of ``workers`` processes (all cores by default) unless one suffices;
+        ``fn`` and the jobs must be picklable (module-level functions, plain values)."""
+        workers = min(self.workers or os.cpu_count() or 1, len(jobs))
+        if workers <= 1 or self.quick:
+            return [fn(j) for j in jobs]
+        with cf.ProcessPoolExecutor(workers) as pool:
+            return list(pool.map(fn, jobs, chunksize=chunksize))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -117,14 +117,19 @@ def make_motion_model(cfg: TrackerConfig) -> MotionModel:
     return Singer(alpha=cfg.singer_alpha, sigma_a=cfg.singer_sigma_a, dim=2)
 
 
+def _fixes_position(det: object) -> bool:
+    """Whether ``det`` alone fixes a ground position (what :func:`_ground_fix` inverts): a box, or a radar return."""
+    return det.kind == "box" or (det.kind == "radar" and np.size(det.z) >= 2)
+
+
 def _ground_fix(det: object, target_height: float) -> tuple[np.ndarray, np.ndarray] | None:
     """(x, y) position and its 2x2 covariance from one detection, or None if it cannot fix a position alone."""
     z = np.asarray(det.z, dtype=float)
     R = np.asarray(det.R, dtype=float)
+    if not _fixes_position(det):
+        return None
     if det.kind == "box":
         return z[:2].copy(), R[:2, :2].copy()
-    if det.kind != "radar" or z.size < 2:
-        return None
     p_s = np.asarray(det.p_sensor_W, dtype=float)
     rng, az = z[0], z[1]
     dz = target_height - p_s[2]
@@ -251,7 +256,7 @@ class SingleTargetTracker:
                 gate = self._gate(np.size(d.z))
                 if nis <= gate and nis < best_nis:
                     best, best_nis = d, nis
-            fixing = any(_ground_fix(d, self.config.target_height) is not None for d in dets)
+            fixing = any(_fixes_position(d) for d in dets)
             if best is None:
                 self.gated_out += len(dets)
                 # only scans that fix a position (radar, box) judge divergence: a bearing fits any range on its line
@@ -263,7 +268,7 @@ class SingleTargetTracker:
                     self._initiate(dets)
                 continue
             self.filter.update(best)
-            if _ground_fix(best, self.config.target_height) is not None:
+            if _fixes_position(best):
                 self._missed = 0
             self.updates += 1
             self.last_update_t = t_meas

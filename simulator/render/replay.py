@@ -139,6 +139,7 @@ class Replayer:
         self.layout = self._layout()
         self.stage = self._choose_stage()
         self.regards = radar_regards(world)
+        self._road_index = {rid: k for k, rid in enumerate(self.geometry.road_ids) if rid}
         self.links = self._radio_links()
 
     def _radio_links(self) -> RadioLinks | None:
@@ -263,10 +264,9 @@ class Replayer:
                             links=self._link_marks(t), constrained_roads=self._road_marks(t, float(p_t[2])))
 
     def _road_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
-        index = {rid: k for k, rid in enumerate(self.geometry.road_ids) if rid}
         marks = []
         for u, est in sorted(self.timeline.estimates.items()):
-            k = index.get(est.road_at(t))
+            k = self._road_index.get(est.road_at(t))
             if k is not None:
                 line = self.geometry.roads[k][:, :2]
                 marks.append((UAV_COLORS[u % len(UAV_COLORS)], np.c_[line, np.full(len(line), z + 0.3)]))

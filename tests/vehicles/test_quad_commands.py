@@ -96,9 +96,9 @@ def test_velocity_yaw_none_faces_velocity_and_explicit_yaw_holds(bullet_client, 
 
 
 def test_sqrt_speed_is_continuous_and_brakes_in_time() -> None:
-    k, a = np.array([1.0]), np.array([3.0])
+    k, a = 1.0, 3.0
     d = np.linspace(0.0, 50.0, 5001)
-    v = np.concatenate([sqrt_speed(np.array([x]), k, a) for x in d])
+    v = np.array([sqrt_speed(x, k, a) for x in d])
     assert np.all(np.diff(v) >= 0) and np.max(np.abs(np.diff(v))) < 0.02  # continuous, monotone
     np.testing.assert_allclose(v[d <= 3.0], d[d <= 3.0])  # linear zone k d up to a / k^2
     far = d > 3.0

@@ -5,10 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 __all__ = ["body_drag_B", "ground_effect_factor", "DownwashConfig", "downwash_force_W"]
 
 
+@njit(cache=True)
 def body_drag_B(v_rel_B: np.ndarray, c_lin: np.ndarray, c_quad: np.ndarray) -> np.ndarray:
     """Drag force in the body frame (N, 3), N.
 
@@ -21,7 +23,12 @@ def body_drag_B(v_rel_B: np.ndarray, c_lin: np.ndarray, c_quad: np.ndarray) -> n
     c_lin, c_quad : np.ndarray
         (N, 3) linear (N s/m) and quadratic (N s^2/m^2) coefficients per body axis.
     """
-    return -(c_lin + c_quad * np.abs(v_rel_B)) * v_rel_B
+    out = np.empty(v_rel_B.shape)
+    for i in range(v_rel_B.shape[0]):
+        for j in range(3):
+            v = v_rel_B[i, j]
+            out[i, j] = -(c_lin[i, j] + c_quad[i, j] * abs(v)) * v
+    return out
 
 
 def ground_effect_factor(h: np.ndarray, rotor_radius: np.ndarray, min_height_ratio: float) -> np.ndarray:

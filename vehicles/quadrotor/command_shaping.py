@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from vehicles.quadrotor.commands import (
     FACE_VELOCITY_MIN_SPEED,
@@ -31,12 +32,42 @@ with when approaching its target (-)."""
 _POSITION, _VELOCITY, _UNICYCLE = 0, 1, 2
 
 
-def sqrt_speed(distance: np.ndarray, k_p: np.ndarray, accel: np.ndarray) -> np.ndarray:
+@njit(cache=True)
+def sqrt_speed(distance: float, k_p: float, accel: float) -> float:
     """Speed towards a target ``distance`` (>= 0) away: ``k_p d`` near it, ``sqrt(2 a (d - a / (2 k_p^2)))`` beyond
     ``d = a / k_p^2`` (continuous, with its derivative), so the UAV can always stop with deceleration ``a``."""
     linear = accel / k_p**2
-    far = np.sqrt(2.0 * accel * np.maximum(distance - 0.5 * linear, 0.0))
-    return np.where(distance > linear, far, k_p * distance)
+    if distance > linear:
+        return math.sqrt(2.0 * accel * (distance - 0.5 * linear))
+    return k_p * distance
+
+
+@njit(cache=True)
+def _shape(mode: np.ndarray, p_sp: np.ndarray, v_sp: np.ndarray, yaw: np.ndarray, speed: np.ndarray,
+           rate: np.ndarray, alt: np.ndarray, tick0: np.ndarray, tick: int, dt: float, p_W: np.ndarray,
+           pos_p: np.ndarray, brake_xy: np.ndarray, brake_z: np.ndarray, max_speed: np.ndarray,
+           max_climb: np.ndarray, v_W: np.ndarray, a_ff: np.ndarray, yaw_out: np.ndarray) -> None:
+    """Velocity set-points ``v_W`` (N, 3), feed-forward accelerations ``a_ff`` (N, 3) and headings ``yaw_out`` (N,) of
+    :meth:`CommandShaper.update` (the laws in :class:`CommandShaper`), written into the given arrays."""
+    for i in range(mode.shape[0]):
+        a_ff[i, 0], a_ff[i, 1], a_ff[i, 2] = 0.0, 0.0, 0.0
+        yaw_out[i] = yaw[i]
+        if mode[i] == _POSITION:
+            ex, ey, ez = p_sp[i, 0] - p_W[i, 0], p_sp[i, 1] - p_W[i, 1], p_sp[i, 2] - p_W[i, 2]
+            d_xy = math.hypot(ex, ey)
+            k = min(sqrt_speed(d_xy, pos_p[i, 0], brake_xy[i]), max_speed[i]) / max(d_xy, 1e-12)
+            v_W[i, 0], v_W[i, 1] = ex * k, ey * k
+            v_W[i, 2] = np.sign(ez) * min(sqrt_speed(abs(ez), pos_p[i, 2], brake_z[i]), max_climb[i])
+        elif mode[i] == _VELOCITY:
+            v_W[i] = v_sp[i]
+        else:  # unicycle: heading from the integer tick count (no accumulated float time)
+            psi = yaw[i] + rate[i] * ((tick - tick0[i]) * dt)
+            c, sn = math.cos(psi), math.sin(psi)
+            v_W[i, 0], v_W[i, 1] = speed[i] * c, speed[i] * sn
+            v_W[i, 2] = min(max(pos_p[i, 2] * (alt[i] - p_W[i, 2]), -max_climb[i]), max_climb[i])
+            turn = speed[i] * rate[i]
+            a_ff[i, 0], a_ff[i, 1] = -turn * sn, turn * c
+            yaw_out[i] = psi
 
 
 class CommandShaper:
@@ -79,15 +110,8 @@ class CommandShaper:
         self._max_turn_accel = TURN_ACCEL_FRACTION * GRAVITY * np.tan(s.tilt_max - s.tilt_margin)
         self._brake_xy = BRAKE_ACCEL_FRACTION * GRAVITY * np.tan(s.tilt_max - s.tilt_margin)
         self._brake_z = np.full(n, BRAKE_ACCEL_FRACTION * GRAVITY)
-        self._update_masks()
-
-    def _update_masks(self) -> None:
-        self._pos_mask = self._mode == _POSITION
-        self._uni_mask = self._mode == _UNICYCLE
-        self._any_pos = bool(self._pos_mask.any())
-        self._any_uni = bool(self._uni_mask.any())
-        self._pos_col = self._pos_mask[:, None]
-        self._uni_col = self._uni_mask[:, None]
+        self._out = VelocitySetpoint(v_W=np.zeros((n, 3)), a_ff_W=np.zeros((n, 3)), yaw=np.zeros(n),
+                                     yaw_rate=np.zeros(n))
 
     def set_command(self, i: int, cmd: FlightCommand, state: FleetState, tick: int) -> list[dict]:
         """Make ``cmd`` UAV ``i``'s command from ``tick`` on; return the saturation events it caused."""
@@ -135,37 +159,14 @@ class CommandShaper:
             self._speed[i], self._rate[i], self._alt[i] = speed, rate, cmd.altitude
             self._yaw[i] = yaw_now
             self._tick0[i] = tick
-        self._update_masks()
         return events
 
     def update(self, state: FleetState, tick: int) -> VelocitySetpoint:
-        """Velocity set-points (N, 3), feed-forward accelerations and headings for all UAVs at ``tick``.
-
-        Only the branches of the modes in use are evaluated.
-        """
-        s = self._s
-        v_W, yaw, a_ff = self._v, self._yaw, np.zeros_like(self._v)
-        if self._any_pos:
-            e = self._p - state.p_W
-            d_xy = np.hypot(e[:, 0], e[:, 1])
-            speed_xy = np.minimum(sqrt_speed(d_xy, s.pos_p[:, 0], self._brake_xy), s.max_speed)
-            v_pos = e * (speed_xy / np.maximum(d_xy, 1e-12))[:, None]
-            v_pos[:, 2] = np.sign(e[:, 2]) * np.minimum(sqrt_speed(np.abs(e[:, 2]), s.pos_p[:, 2], self._brake_z),
-                                                         s.max_climb_rate)
-            v_W = np.where(self._pos_col, v_pos, v_W)
-        if self._any_uni:
-            # Heading from the integer tick count (no accumulated float time).
-            psi = self._yaw + self._rate * ((tick - self._tick0) * self._dt)
-            c, sn = np.cos(psi), np.sin(psi)
-            v_uni = np.empty_like(a_ff)
-            v_uni[:, 0] = self._speed * c
-            v_uni[:, 1] = self._speed * sn
-            v_uni[:, 2] = np.minimum(np.maximum(s.pos_p[:, 2] * (self._alt - state.p_W[:, 2]), -s.max_climb_rate),
-                                     s.max_climb_rate)
-            turn = self._speed * self._rate
-            a_ff[:, 0] = -turn * sn
-            a_ff[:, 1] = turn * c
-            v_W = np.where(self._uni_col, v_uni, v_W)
-            a_ff *= self._uni_col
-            yaw = np.where(self._uni_mask, psi, yaw)
-        return VelocitySetpoint(v_W=v_W, a_ff_W=a_ff, yaw=yaw, yaw_rate=self._rate.copy())
+        """Velocity set-points (N, 3), feed-forward accelerations and headings for all UAVs at ``tick`` (the shaper's
+        own set-point, overwritten at the next update)."""
+        s, out = self._s, self._out
+        _shape(self._mode, self._p, self._v, self._yaw, self._speed, self._rate, self._alt, self._tick0, tick,
+               self._dt, state.p_W, s.pos_p, self._brake_xy, self._brake_z, s.max_speed, s.max_climb_rate, out.v_W,
+               out.a_ff_W, out.yaw)
+        out.yaw_rate[:] = self._rate
+        return out

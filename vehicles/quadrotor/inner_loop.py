@@ -2,15 +2,48 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from vehicles.quadrotor.controller import Controller
-from vehicles.quadrotor.rotation import rotate_T, yaw_of
 from vehicles.quadrotor.setpoints import AttitudeSetpoint, RateThrustSetpoint, WrenchSetpoint
 from vehicles.quadrotor.stack import AirframeStack
 from vehicles.quadrotor.state import FleetState
 
 __all__ = ["AttitudeController", "RateController"]
+
+
+@njit(cache=True)
+def _attitude_rates(R: np.ndarray, F_W: np.ndarray, yaw_d: np.ndarray, yaw_rate_d: np.ndarray, k_rp: np.ndarray,
+                    k_yaw: np.ndarray, max_rate: np.ndarray, omega: np.ndarray, thrust: np.ndarray) -> None:
+    """Body-rate commands ``omega`` (N, 3) and collective thrusts ``thrust`` (N,) of :class:`AttitudeController` (its
+    equations), written into the given arrays."""
+    for i in range(R.shape[0]):
+        F0, F1, F2 = F_W[i, 0], F_W[i, 1], F_W[i, 2]
+        fx = R[i, 0, 0] * F0 + R[i, 1, 0] * F1 + R[i, 2, 0] * F2
+        fy = R[i, 0, 1] * F0 + R[i, 1, 1] * F1 + R[i, 2, 1] * F2
+        fz = R[i, 0, 2] * F0 + R[i, 1, 2] * F1 + R[i, 2, 2] * F2
+        h = math.hypot(fx, fy)
+        scale = k_rp[i] * math.atan2(h, fz) / max(h, 1e-12)
+        e_yaw = (yaw_d[i] - math.atan2(R[i, 1, 0], R[i, 0, 0]) + math.pi) % (2.0 * math.pi) - math.pi
+        r = yaw_rate_d[i]
+        w = (R[i, 2, 0] * r - fy * scale, R[i, 2, 1] * r + fx * scale, R[i, 2, 2] * r + k_yaw[i] * e_yaw)
+        for j in range(3):
+            omega[i, j] = min(max(w[j], -max_rate[i, j]), max_rate[i, j])
+        thrust[i] = max(fz, 0.0)
+
+
+@njit(cache=True)
+def _rate_torques(omega_cmd: np.ndarray, omega: np.ndarray, JK: np.ndarray, J: np.ndarray, tau: np.ndarray) -> None:
+    """Body torques ``tau`` (N, 3) of :class:`RateController` (its equation), written into the given array."""
+    for i in range(omega.shape[0]):
+        wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
+        Jx, Jy, Jz = J[i, 0], J[i, 1], J[i, 2]
+        tau[i, 0] = JK[i, 0] * (omega_cmd[i, 0] - wx) + (Jz - Jy) * wy * wz
+        tau[i, 1] = JK[i, 1] * (omega_cmd[i, 1] - wy) + (Jx - Jz) * wz * wx
+        tau[i, 2] = JK[i, 2] * (omega_cmd[i, 2] - wz) + (Jy - Jx) * wx * wy
 
 
 class AttitudeController(Controller[AttitudeSetpoint, RateThrustSetpoint]):
@@ -36,24 +69,16 @@ class AttitudeController(Controller[AttitudeSetpoint, RateThrustSetpoint]):
     """
 
     def __init__(self, stack: AirframeStack) -> None:
-        self._k_rp = stack.att_p[:, 0]
-        self._k_yaw = stack.att_p[:, 2]
+        self._k_rp = np.ascontiguousarray(stack.att_p[:, 0])
+        self._k_yaw = np.ascontiguousarray(stack.att_p[:, 2])
         self._max_rate = stack.max_rate
-        self._min_rate = -stack.max_rate
+        self._out = RateThrustSetpoint(omega_B=np.zeros((stack.n, 3)), thrust=np.zeros(stack.n))
 
     def update(self, setpoint: AttitudeSetpoint, state: FleetState) -> RateThrustSetpoint:
-        R = state.R_WB
-        F_B = rotate_T(R, setpoint.F_W)
-        fx, fy, fz = F_B[:, 0], F_B[:, 1], F_B[:, 2]
-        h = np.hypot(fx, fy)
-        scale = self._k_rp * np.arctan2(h, fz) / np.maximum(h, 1e-12)
-        e_yaw = np.remainder(setpoint.yaw - yaw_of(R) + np.pi, 2.0 * np.pi) - np.pi
-        omega = R[:, 2, :] * setpoint.yaw_rate[:, None]
-        omega[:, 0] -= fy * scale
-        omega[:, 1] += fx * scale
-        omega[:, 2] += self._k_yaw * e_yaw
-        omega = np.minimum(np.maximum(omega, self._min_rate), self._max_rate)
-        return RateThrustSetpoint(omega_B=omega, thrust=np.maximum(fz, 0.0))
+        out = self._out
+        _attitude_rates(state.R_WB, setpoint.F_W, setpoint.yaw, setpoint.yaw_rate, self._k_rp, self._k_yaw,
+                        self._max_rate, out.omega_B, out.thrust)
+        return out
 
 
 class RateController(Controller[RateThrustSetpoint, WrenchSetpoint]):
@@ -68,15 +93,13 @@ class RateController(Controller[RateThrustSetpoint, WrenchSetpoint]):
     for the principal-axis (diagonal) inertia of the airframe.
     """
 
-    _NEXT = np.array([1, 2, 0])
-    _PREV = np.array([2, 0, 1])
-
     def __init__(self, stack: AirframeStack) -> None:
-        J = stack.inertia
-        self._JK = J * stack.rate_p
-        self._gyro = J[:, self._PREV] - J[:, self._NEXT]
+        self._J = stack.inertia
+        self._JK = stack.inertia * stack.rate_p
+        self._out = WrenchSetpoint(thrust=np.zeros(stack.n), torque_B=np.zeros((stack.n, 3)))
 
     def update(self, setpoint: RateThrustSetpoint, state: FleetState) -> WrenchSetpoint:
-        w = state.omega_B
-        tau = self._JK * (setpoint.omega_B - w) + self._gyro * w[:, self._NEXT] * w[:, self._PREV]
-        return WrenchSetpoint(thrust=setpoint.thrust, torque_B=tau)
+        out = self._out
+        _rate_torques(setpoint.omega_B, state.omega_B, self._JK, self._J, out.torque_B)
+        out.thrust = setpoint.thrust
+        return out

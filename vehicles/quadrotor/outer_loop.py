@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
+from numba import njit
+
+from vehicles.quadrotor.aero import body_drag_B
 from vehicles.quadrotor.controller import Controller
 from vehicles.quadrotor.params import GRAVITY
 from vehicles.quadrotor.rotation import cross3, rotate_T
@@ -21,6 +25,40 @@ MIN_THRUST_FRACTION = 0.2
 
 THRUST_HEADROOM = 0.85
 """Fraction of the maximum total thrust the thrust-vector stage may use, leaving the rest for attitude control (-)."""
+
+
+@njit(cache=True)
+def _velocity_loop(v_d: np.ndarray, a_ff: np.ndarray, v_W: np.ndarray, R_WB: np.ndarray, integral: np.ndarray,
+                   freeze: np.ndarray, vel_p: np.ndarray, ki_dt: np.ndarray, band: np.ndarray, lim: np.ndarray,
+                   c_lin: np.ndarray, c_quad: np.ndarray, mass: np.ndarray, a_W: np.ndarray) -> None:
+    """Acceleration set-points ``a_W`` (N, 3) of :class:`VelocityController`, written into the given array; updates
+    ``integral`` in place."""
+    drag_B = body_drag_B(rotate_T(R_WB, v_W), c_lin, c_quad)  # the force drag exerts; the loop cancels it
+    for i in range(v_W.shape[0]):
+        for j in range(3):
+            e = v_d[i, j] - v_W[i, j]
+            if abs(e) <= band[i] and not freeze[i]:
+                integral[i, j] = min(max(integral[i, j] + ki_dt[i, j] * e, -lim[i]), lim[i])
+            a_drag = -(R_WB[i, j, 0] * drag_B[i, 0] + R_WB[i, j, 1] * drag_B[i, 1] + R_WB[i, j, 2] * drag_B[i, 2])
+            a_W[i, j] = a_ff[i, j] + vel_p[i, j] * e + integral[i, j] + a_drag / mass[i]
+
+
+@njit(cache=True)
+def _thrust_vector(a_W: np.ndarray, mass: np.ndarray, weight: np.ndarray, f_max: np.ndarray, tan_tilt: np.ndarray,
+                   F: np.ndarray, requested: np.ndarray, saturated: np.ndarray) -> None:
+    """Desired rotor forces ``F`` (N, 3) of :class:`ThrustVectorController`; fills ``requested`` (N, 2) with the
+    unshortened (horizontal, vertical) force and ``saturated`` (N,) with whether it was shortened."""
+    for i in range(a_W.shape[0]):
+        fx, fy = a_W[i, 0] * mass[i], a_W[i, 1] * mass[i]
+        fz = min(max(a_W[i, 2] * mass[i] + weight[i], MIN_THRUST_FRACTION * weight[i]), f_max[i])
+        h = math.hypot(fx, fy)
+        requested[i, 0], requested[i, 1] = h, fz
+        h_max = min(fz * tan_tilt[i], math.sqrt(max(f_max[i] ** 2 - fz**2, 0.0)))
+        saturated[i] = h > h_max
+        if saturated[i]:
+            k = min(h_max / max(h, 1e-12), 1.0)
+            fx, fy = fx * k, fy * k
+        F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
 
 
 class VelocityController(Controller[VelocitySetpoint, AccelerationSetpoint]):
@@ -49,27 +87,19 @@ class VelocityController(Controller[VelocitySetpoint, AccelerationSetpoint]):
         self._dt = dt
         self._integral = np.zeros((stack.n, 3))
         self._ki_dt = stack.vel_i * dt
-        self._band = stack.vel_i_band[:, None]
-        self._lim = stack.vel_i_limit[:, None]
         self.freeze = np.zeros(stack.n, dtype=bool)
         """(N,) UAVs whose integral is held this step (set by the fleet from the thrust-vector saturation)."""
-
-    def _not_frozen_col(self) -> np.ndarray:
-        return ~self.freeze[:, None]
+        self._out = AccelerationSetpoint(a_W=np.zeros((stack.n, 3)), yaw=np.zeros(stack.n), yaw_rate=np.zeros(stack.n))
 
     def reset(self) -> None:
         self._integral[:] = 0.0
 
     def update(self, setpoint: VelocitySetpoint, state: FleetState) -> AccelerationSetpoint:
-        s = self._s
-        e = setpoint.v_W - state.v_W
-        accumulate = (np.abs(e) <= self._band) & self._not_frozen_col()
-        self._integral = np.minimum(np.maximum(self._integral + self._ki_dt * e * accumulate, -self._lim), self._lim)
-        v_B = rotate_T(state.R_WB, state.v_W)
-        drag_B = s.drag_linear * v_B + s.drag_quadratic * np.abs(v_B) * v_B
-        a_drag_W = np.matmul(state.R_WB, drag_B[:, :, None])[:, :, 0] / s.mass[:, None]
-        a_W = setpoint.a_ff_W + s.vel_p * e + self._integral + a_drag_W
-        return AccelerationSetpoint(a_W=a_W, yaw=setpoint.yaw, yaw_rate=setpoint.yaw_rate)
+        s, out = self._s, self._out
+        _velocity_loop(setpoint.v_W, setpoint.a_ff_W, state.v_W, state.R_WB, self._integral, self.freeze, s.vel_p,
+                       self._ki_dt, s.vel_i_band, s.vel_i_limit, s.drag_linear, s.drag_quadratic, s.mass, out.a_W)
+        out.yaw, out.yaw_rate = setpoint.yaw, setpoint.yaw_rate
+        return out
 
 
 class ThrustVectorController(Controller[AccelerationSetpoint, AttitudeSetpoint]):
@@ -92,9 +122,9 @@ class ThrustVectorController(Controller[AccelerationSetpoint, AttitudeSetpoint])
         self._tan_tilt = np.tan(s.tilt_max - s.tilt_margin)
         self._weight = s.mass * GRAVITY
         self._f_max = THRUST_HEADROOM * 4.0 * s.k_f * s.rotor_speed_max**2
-        self._f_max2 = self._f_max**2
         self.saturated = np.zeros(s.n, dtype=bool)
         self._requested = np.zeros((s.n, 2))
+        self._out = AttitudeSetpoint(F_W=np.zeros((s.n, 3)), yaw=np.zeros(s.n), yaw_rate=np.zeros(s.n))
 
     @property
     def tilt_limit(self) -> np.ndarray:
@@ -107,16 +137,11 @@ class ThrustVectorController(Controller[AccelerationSetpoint, AttitudeSetpoint])
         return np.arctan2(self._requested[:, 0], self._requested[:, 1])
 
     def update(self, setpoint: AccelerationSetpoint, state: FleetState) -> AttitudeSetpoint:
-        F = setpoint.a_W * self._s.mass[:, None]
-        F[:, 2] += self._weight
-        F[:, 2] = np.minimum(np.maximum(F[:, 2], MIN_THRUST_FRACTION * self._weight), self._f_max)
-        h = np.hypot(F[:, 0], F[:, 1])
-        self._requested[:, 0], self._requested[:, 1] = h, F[:, 2]
-        h_max = np.minimum(F[:, 2] * self._tan_tilt, np.sqrt(np.maximum(self._f_max2 - F[:, 2] ** 2, 0.0)))
-        self.saturated = h > h_max
-        if self.saturated.any():
-            F[:, :2] *= np.minimum(h_max / np.maximum(h, 1e-12), 1.0)[:, None]
-        return AttitudeSetpoint(F_W=F, yaw=setpoint.yaw, yaw_rate=setpoint.yaw_rate)
+        out = self._out
+        _thrust_vector(setpoint.a_W, self._s.mass, self._weight, self._f_max, self._tan_tilt, out.F_W,
+                       self._requested, self.saturated)
+        out.yaw, out.yaw_rate = setpoint.yaw, setpoint.yaw_rate
+        return out
 
 
 def attitude_from_thrust(F_W: np.ndarray, yaw: np.ndarray) -> np.ndarray:

@@ -1,46 +1,42 @@
-"""Vectorised rotation functions over stacks of UAVs. Quaternions are (x, y, z, w) like PyBullet; ``R_WB`` maps body to
-world coordinates, ``v_W = R_WB @ v_B``.
+"""Rotation functions over stacks of UAVs. Quaternions are (x, y, z, w) like PyBullet; ``R_WB`` maps body to world
+coordinates, ``v_W = R_WB @ v_B``.
 
-The functions are written as a few large numpy operations (constant matrices applied to stacked products) because they
-run every physics tick for every UAV, where per-call overhead dominates.
+:func:`quat_to_rotmat` and :func:`rotate_T` run every physics tick for every UAV, where numpy's per-call overhead on
+3-vectors, not the arithmetic, sets the cost: they are compiled loops (numba), callable from Python and from the other
+compiled kernels of the flight stack.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-__all__ = ["quat_to_rotmat", "yaw_to_quat", "yaw_of", "tilt_of", "cross3", "rotate_T"]
-
-
-def _quat_products_to_R() -> tuple[np.ndarray, np.ndarray]:
-    # Entries of R as linear combinations of the products q_a q_b (a, b in x, y, z, w -> 0..3) plus a constant.
-    x, y, z, w = 0, 1, 2, 3
-    terms = {
-        0: [(-2, y, y), (-2, z, z)], 1: [(2, x, y), (-2, w, z)], 2: [(2, x, z), (2, w, y)],
-        3: [(2, x, y), (2, w, z)], 4: [(-2, x, x), (-2, z, z)], 5: [(2, y, z), (-2, w, x)],
-        6: [(2, x, z), (-2, w, y)], 7: [(2, y, z), (2, w, x)], 8: [(-2, x, x), (-2, y, y)],
-    }
-    M = np.zeros((16, 9))
-    for k, combo in terms.items():
-        for coef, a, b in combo:
-            M[4 * a + b, k] += coef
-    return M, np.eye(3).reshape(9)
-
-
-_Q2R, _Q2R_CONST = _quat_products_to_R()
+__all__ = ["quat_to_rotmat", "yaw_to_quat", "yaw_of", "tilt_of", "cross3", "rotate_T", "rotation_and_body_rates"]
 
 _I1 = np.array([1, 2, 0])
 _I2 = np.array([2, 0, 1])
 
 
+@njit(cache=True)
 def quat_to_rotmat(q_WB: np.ndarray) -> np.ndarray:
     """Rotation matrices ``R_WB`` (N, 3, 3) from unit quaternions (N, 4) in (x, y, z, w) order.
 
     .. math::  R = I + 2 w [v]_\\times + 2 [v]_\\times^2, \\quad v = (x, y, z)
     """
     n = q_WB.shape[0]
-    products = (q_WB[:, :, None] * q_WB[:, None, :]).reshape(n, 16)
-    return (products.dot(_Q2R) + _Q2R_CONST).reshape(n, 3, 3)
+    R = np.empty((n, 3, 3))
+    for i in range(n):
+        x, y, z, w = q_WB[i, 0], q_WB[i, 1], q_WB[i, 2], q_WB[i, 3]
+        R[i, 0, 0] = 1.0 - 2.0 * (y * y + z * z)
+        R[i, 0, 1] = 2.0 * (x * y - w * z)
+        R[i, 0, 2] = 2.0 * (x * z + w * y)
+        R[i, 1, 0] = 2.0 * (x * y + w * z)
+        R[i, 1, 1] = 1.0 - 2.0 * (x * x + z * z)
+        R[i, 1, 2] = 2.0 * (y * z - w * x)
+        R[i, 2, 0] = 2.0 * (x * z - w * y)
+        R[i, 2, 1] = 2.0 * (y * z + w * x)
+        R[i, 2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return R
 
 
 def yaw_to_quat(yaw: np.ndarray) -> np.ndarray:
@@ -67,6 +63,20 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a.take(_I1, axis=1) * b.take(_I2, axis=1) - a.take(_I2, axis=1) * b.take(_I1, axis=1)
 
 
+@njit(cache=True)
 def rotate_T(R_WB: np.ndarray, v_W: np.ndarray) -> np.ndarray:
     """``R_WB^T v_W`` row-wise: world vectors (N, 3) expressed in the body frame."""
-    return np.matmul(v_W[:, None, :], R_WB)[:, 0, :]
+    n = v_W.shape[0]
+    out = np.empty((n, 3))
+    for i in range(n):
+        for j in range(3):
+            out[i, j] = R_WB[i, 0, j] * v_W[i, 0] + R_WB[i, 1, j] * v_W[i, 1] + R_WB[i, 2, j] * v_W[i, 2]
+    return out
+
+
+@njit(cache=True)
+def rotation_and_body_rates(x: np.ndarray, R_WB: np.ndarray, omega_B: np.ndarray) -> None:
+    """Fill ``R_WB`` (N, 3, 3) and ``omega_B`` (N, 3) from rows ``(p_W, q_WB, v_W, omega_W)`` (N, 13) of body states
+    as PyBullet reports them (angular velocity in the world frame)."""
+    R_WB[:] = quat_to_rotmat(x[:, 3:7])
+    omega_B[:] = rotate_T(R_WB, x[:, 10:13])

@@ -5,8 +5,10 @@ Each controller turns one of these into the next::
     VelocitySetpoint --VelocityController--> AccelerationSetpoint --ThrustVectorController--> AttitudeSetpoint
     --AttitudeController--> RateThrustSetpoint --RateController--> WrenchSetpoint --MotorMixer--> RotorSpeedSetpoint
 
-They are plain containers built every control tick (slotted, not frozen, and without validation, to keep the per-tick
-cost low); shapes are stated per field. Stages never modify a set-point they receive.
+They are plain containers (slotted, not frozen, and without validation, to keep the per-tick cost low); shapes are
+stated per field. Stages never modify a set-point they receive. Each stage owns the set-point it returns and overwrites
+its arrays at its next update (the cascade runs every physics tick, where allocating fresh arrays would cost more than
+the arithmetic): copy what you want to keep.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Per-UAV airframe parameters and gains stacked into arrays, so a fleet of mixed airframes runs in one numpy pass."""
+"""Per-UAV airframe parameters and gains stacked into arrays, so a fleet of mixed airframes runs in one pass."""
 
 from __future__ import annotations
 
@@ -9,17 +9,7 @@ import numpy as np
 
 from vehicles.quadrotor.params import ROTOR_SPIN, QuadrotorParams, rotor_positions_B
 
-__all__ = ["AirframeStack", "batched_matvec"]
-
-
-def batched_matvec(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Row-wise ``M_i x_i``: ``M`` is (N, a, b), or (a, b) when every UAV shares it; ``x`` is (N, b); returns (N, a).
-
-    A shared matrix is applied with one 2-D product, much cheaper than a stacked ``matmul`` for small N.
-    """
-    if M.ndim == 2:
-        return x.dot(M.T)
-    return np.matmul(M, x[:, :, None])[:, :, 0]
+__all__ = ["AirframeStack"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,17 +58,11 @@ class AirframeStack:
     alloc: np.ndarray
     alloc_inv: np.ndarray
     torque_map: np.ndarray
-    uniform: bool = False
-    """True when every UAV flies the same airframe, so per-UAV matrices can be shared (see :meth:`shared`)."""
 
     @property
     def n(self) -> int:
         """Number of UAVs."""
         return int(self.mass.shape[0])
-
-    def shared(self, M: np.ndarray) -> np.ndarray:
-        """``M`` (N, a, b) as one (a, b) matrix if the fleet is uniform, else unchanged (for :func:`batched_matvec`)."""
-        return M[0] if self.uniform else M
 
     @classmethod
     def from_params(cls, airframes: Sequence[QuadrotorParams]) -> AirframeStack:
@@ -124,5 +108,4 @@ class AirframeStack:
             alloc=alloc,
             alloc_inv=np.linalg.inv(alloc),
             torque_map=torque_map,
-            uniform=all(a == airframes[0] for a in airframes),
         )

@@ -8,7 +8,8 @@ model from the current state, so the reference is dynamically consistent and the
 + r_k with A_k = I + T [[0, 0, −v^r sin θ^r], [0, 0, v^r cos θ^r], 0], B_k = T [[cos θ^r, 0], [sin θ^r, 0], [0, 1]] and
 r_k = f(x^r_k, u^r_k) − A_k x^r_k − B_k u^r_k. Cost (paper eq. 19, plus a heading regulariser ε θ² and the slack
 penalty): Σ_{k=1}^M w_x (x_k − x^t_k)² + w_y (y_k − y^t_k)² + Σ_{k=0}^{M−1} w_v v_k² + w_o ω_k².
-Decision vector z = [u_0, X_1, …, u_{M−1}, X_M, e_1, …, e_M] (e: separation slacks, penalised ρ₁ e + ρ₂ e²).
+Decision vector z = [u_0, X_1, e_1, …, u_{M−1}, X_M, e_M] (e: separation slacks, penalised ρ₁ e + ρ₂ e²), stage by
+stage so that the interior point's factorisations stay banded (see :mod:`autonomy.guidance.pdip`).
 
 Separation ‖p_k − q_k‖ ≥ D against each same-altitude teammate's predicted (shared) position q_k, made linear:
 
@@ -29,10 +30,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
+import numba
 import numpy as np
 
 from autonomy.guidance.base import Guidance
-from autonomy.guidance.blas import blas_threads
 from autonomy.guidance.pdip import PdipOptions, solve_qp_pdip
 from autonomy.guidance.setpoints import UnicycleSetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
@@ -40,6 +41,7 @@ from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 __all__ = ["FastMpcConfig", "FastMpcQp", "FastMpcGuidance", "build_fast_mpc_qp", "euler_rollout"]
 
 _NX, _NU = 3, 2
+_NB = _NX + _NU + 1  # variables per stage: u_k, X_{k+1}, e_{k+1}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -135,74 +137,99 @@ class FastMpcQp:
     u_ref: np.ndarray
 
 
+@numba.njit(cache=True)
+def _rollout(x0: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
+    xs = np.empty((u.shape[0] + 1, _NX))
+    xs[0, 0], xs[0, 1], xs[0, 2] = x0[0], x0[1], x0[2]
+    for k in range(u.shape[0]):
+        th = xs[k, 2]
+        xs[k + 1, 0] = xs[k, 0] + dt * u[k, 0] * np.cos(th)
+        xs[k + 1, 1] = xs[k, 1] + dt * u[k, 0] * np.sin(th)
+        xs[k + 1, 2] = th + dt * u[k, 1]
+    return xs
+
+
 def euler_rollout(x0: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     """States (M+1, 3) of the Euler unicycle from ``x0`` (3,) under inputs ``u`` (M, 2)."""
-    xs = [np.asarray(x0, dtype=float)]
-    for v, om in u:
-        x, y, th = xs[-1]
-        xs.append(np.array([x + dt * v * np.cos(th), y + dt * v * np.sin(th), th + dt * om]))
-    return np.array(xs)
+    return _rollout(np.asarray(x0, dtype=np.float64), np.ascontiguousarray(u, dtype=np.float64), float(dt))
+
+
+@numba.njit(cache=True)
+def _assemble(x0: np.ndarray, u_ref: np.ndarray, target_xy: np.ndarray, q: np.ndarray, dt: float, h_diag: np.ndarray,
+              slack_l1: float, v_min: float, v_max: float, omega_max: float, d_sep: float, buffered: bool):
+    """(H, f, C, b, P, m, x_ref) of :func:`build_fast_mpc_qp`; ``q`` (teammates, M, 2), ``h_diag`` the Hessian
+    diagonal of one stage, ``d_sep`` = D'."""
+    M, nq = u_ref.shape[0], q.shape[0]
+    n, ns = _NB * M, 5 + nq
+    xr = _rollout(x0, u_ref, dt)
+    H, f = np.zeros((n, n)), np.zeros(n)
+    C, b = np.zeros((_NX * M, n)), np.zeros(_NX * M)
+    P, m = np.zeros((ns * M, n)), np.zeros(ns * M)
+    for k in range(M):
+        iu, ix, ie, row = _NB * k, _NB * k + _NU, _NB * k + _NU + _NX, _NX * k
+        # cost: diag(2w_v, 2w_o, 2w_x, 2w_y, 2ε, 2ρ₂), linear part −2 w (x^t, y^t) and ρ₁ e
+        for i in range(_NB):
+            H[iu + i, iu + i] = h_diag[i]
+        f[ix], f[ix + 1], f[ie] = -h_diag[2] * target_xy[k, 0], -h_diag[3] * target_xy[k, 1], slack_l1
+        # dynamics X_{k+1} − A_k X_k − B_k u_k = r_k (A_0 x_0 + r_0 for k = 0)
+        th, v = xr[k, 2], u_ref[k, 0]
+        a02, a12 = -dt * v * np.sin(th), dt * v * np.cos(th)  # A_k − I
+        bx, by = dt * np.cos(th), dt * np.sin(th)  # B_k = [[bx, 0], [by, 0], [0, T]]
+        r = (xr[k + 1, 0] - (xr[k, 0] + a02 * th) - bx * v, xr[k + 1, 1] - (xr[k, 1] + a12 * th) - by * v,
+             xr[k + 1, 2] - th - dt * u_ref[k, 1])
+        C[row, ix], C[row + 1, ix + 1], C[row + 2, ix + 2] = 1.0, 1.0, 1.0
+        C[row, iu], C[row + 1, iu], C[row + 2, iu + 1] = -bx, -by, -dt
+        if k == 0:
+            b[0], b[1], b[2] = x0[0] + a02 * x0[2] + r[0], x0[1] + a12 * x0[2] + r[1], x0[2] + r[2]
+        else:
+            jx = ix - _NB
+            C[row, jx], C[row + 1, jx + 1], C[row + 2, jx + 2] = -1.0, -1.0, -1.0
+            C[row, jx + 2], C[row + 1, jx + 2] = -a02, -a12
+            b[row], b[row + 1], b[row + 2] = r
+        # v ≤ v_max, −v ≤ −v_min, ω ≤ ω_max, −ω ≤ ω_max, −e ≤ 0, then one separation row per teammate
+        base = ns * k
+        P[base, iu], P[base + 1, iu], P[base + 2, iu + 1], P[base + 3, iu + 1] = 1.0, -1.0, 1.0, -1.0
+        m[base], m[base + 1], m[base + 2], m[base + 3] = v_max, -v_min, omega_max, omega_max
+        P[base + 4, ie] = -1.0
+        px, py = xr[k + 1, 0], xr[k + 1, 1]
+        for j in range(nq):
+            rr, qx, qy = base + 5 + j, q[j, k, 0], q[j, k, 1]
+            P[rr, ie] = -1.0
+            if buffered:
+                dx, dy = px - qx, py - qy
+                nrm = np.sqrt(dx * dx + dy * dy)
+                if nrm > 1e-9:
+                    nx, ny = dx / nrm, dy / nrm
+                else:  # coincident references: push sideways
+                    side = xr[k + 1, 2] + np.pi / 2
+                    nx, ny = np.cos(side), np.sin(side)
+                P[rr, ix], P[rr, ix + 1] = -nx, -ny
+                m[rr] = -(nx * 0.5 * (px + qx) + ny * 0.5 * (py + qy) + d_sep / 2)
+            else:
+                sg = 1.0 if px + py >= qx + qy else -1.0
+                P[rr, ix], P[rr, ix + 1] = -sg, -sg
+                m[rr] = -(sg * (qx + qy) + np.sqrt(2.0) * d_sep)
+    return H, f, C, b, P, m, xr
 
 
 def build_fast_mpc_qp(c: FastMpcConfig, x0: np.ndarray, u_ref: np.ndarray, target_xy: np.ndarray,
                       others_xy: Sequence[np.ndarray]) -> FastMpcQp:
     """Stack the QP (module docstring) for state ``x0`` (3,), reference inputs ``u_ref`` (M, 2), predicted target
-    positions ``target_xy`` (M, 2) at steps 1..M and same-altitude teammates' predicted positions (M, 2) each."""
-    M, T = c.horizon, c.dt
-    nb = _NX + _NU
-    n = nb * M + M
-    xr = euler_rollout(x0, u_ref, T)
-    H = np.zeros(n)
-    f = np.zeros(n)
-    C = np.zeros((_NX * M, n))
-    b = np.zeros(_NX * M)
-    rows_P, rows_m = [], []
-    D2 = c.separation_distance + c.separation_margin
-    for k in range(M):
-        iu, ix, ie = nb * k, nb * k + _NU, nb * M + k
-        H[iu:iu + 2] = 2 * np.array([c.w_v, c.w_o])
-        H[ix:ix + 3] = 2 * np.array([c.w_x, c.w_y, c.theta_reg])
-        f[ix:ix + 2] = -2 * np.array([c.w_x, c.w_y]) * target_xy[k]
-        H[ie], f[ie] = 2 * c.slack_l2, c.slack_l1
-        th, v = xr[k, 2], u_ref[k, 0]
-        A = np.eye(3)
-        A[0, 2], A[1, 2] = -T * v * np.sin(th), T * v * np.cos(th)
-        B = T * np.array([[np.cos(th), 0.0], [np.sin(th), 0.0], [0.0, 1.0]])
-        r = xr[k + 1] - A @ xr[k] - B @ u_ref[k]
-        rows = slice(_NX * k, _NX * (k + 1))
-        C[rows, ix:ix + 3] = np.eye(3)
-        C[rows, iu:iu + 2] = -B
-        if k == 0:
-            b[rows] = A @ x0 + r
-        else:
-            C[rows, ix - nb:ix - nb + 3] = -A
-            b[rows] = r
-        for j, (lo, hi) in enumerate(((c.v_min, c.v_max), (-c.omega_max, c.omega_max))):
-            row = np.zeros(n)
-            row[iu + j] = 1.0
-            rows_P += [row, -row]
-            rows_m += [hi, -lo]
-        row = np.zeros(n)
-        row[ie] = -1.0
-        rows_P.append(row)
-        rows_m.append(0.0)
-        for q in others_xy:
-            row = np.zeros(n)
-            row[ie] = -1.0
-            if c.separation_mode == "buffered":
-                d = xr[k + 1, :2] - q[k]
-                nrm = float(np.linalg.norm(d))
-                side = xr[k + 1, 2] + np.pi / 2  # coincident references: push sideways
-                nv = d / nrm if nrm > 1e-9 else np.array([np.cos(side), np.sin(side)])
-                mid = 0.5 * (xr[k + 1, :2] + q[k])
-                row[ix:ix + 2] = -nv
-                rows_m.append(-(nv @ mid + D2 / 2))
-            else:
-                sg = 1.0 if (xr[k + 1, 0] + xr[k + 1, 1]) >= (q[k, 0] + q[k, 1]) else -1.0
-                row[ix:ix + 2] = -sg
-                rows_m.append(-(sg * (q[k, 0] + q[k, 1]) + np.sqrt(2) * D2))
-            rows_P.append(row)
-    return FastMpcQp(H=np.diag(H), f=f, C=C, b=b, P=np.array(rows_P), m=np.array(rows_m), x_ref=xr, u_ref=u_ref)
+    positions ``target_xy`` (M, 2) at steps 1..M and same-altitude teammates' predicted positions (M, 2) each.
+
+    Variables and rows are ordered stage by stage: block ``[u_k, X_{k+1}, e_{k+1}]``, its three dynamics rows, and
+    its 5 + (teammates) inequality rows (speed and turn-rate bounds, e ≥ 0, separation), which makes each
+    interior-point iteration cost O(M) (:mod:`autonomy.guidance.pdip`)."""
+    M = c.horizon
+    u_ref = np.ascontiguousarray(u_ref, dtype=np.float64)
+    q = np.ascontiguousarray(np.asarray(others_xy, dtype=np.float64).reshape(-1, M, 2))
+    h_diag = 2.0 * np.array([c.w_v, c.w_o, c.w_x, c.w_y, c.theta_reg, c.slack_l2])
+    H, f, C, b, P, m, xr = _assemble(np.asarray(x0, dtype=np.float64), u_ref,
+                                     np.ascontiguousarray(target_xy, dtype=np.float64), q, float(c.dt), h_diag,
+                                     float(c.slack_l1), float(c.v_min), float(c.v_max), float(c.omega_max),
+                                     float(c.separation_distance + c.separation_margin),
+                                     c.separation_mode == "buffered")
+    return FastMpcQp(H=H, f=f, C=C, b=b, P=P, m=m, x_ref=xr, u_ref=u_ref)
 
 
 class FastMpcGuidance(Guidance):
@@ -242,8 +269,7 @@ class FastMpcGuidance(Guidance):
         self.last_qp = qp
         z0 = self._stack(qp.x_ref, u_ref)
         t0, c0 = time.perf_counter(), time.thread_time()
-        with blas_threads(1):  # tiny dense factorisations: threads only add overhead
-            sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, c.pdip, z0=z0)
+        sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, c.pdip, z0=z0)
         self.stats.solve_times_s.append(time.perf_counter() - t0)
         self.stats.solve_cpu_times_s.append(time.thread_time() - c0)
         self.stats.solves += 1
@@ -251,7 +277,7 @@ class FastMpcGuidance(Guidance):
         self.stats.last_status = "converged" if sol.converged else f"iteration cap, residual {sol.residual:.2e}"
         if not sol.converged:
             self.stats.inexact += 1
-        u = sol.z[: (_NX + _NU) * c.horizon].reshape(c.horizon, _NX + _NU)[:, :_NU]
+        u = sol.z.reshape(c.horizon, _NB)[:, :_NU]
         if not np.all(np.isfinite(u)):
             self.stats.failures += 1
             self.stats.fallbacks_shifted += 1
@@ -261,7 +287,7 @@ class FastMpcGuidance(Guidance):
         self._plan = euler_rollout(x0, u, c.dt)
         return UnicycleSetpoint(speed=float(u[0, 0]), heading_rate=float(u[0, 1]), altitude=alt)
 
-    def _stack(self, x_ref: np.ndarray, u_ref: np.ndarray) -> np.ndarray:
-        M = self.config.horizon
-        blocks = np.hstack([u_ref, x_ref[1:]]).reshape(-1)
-        return np.concatenate([blocks, np.zeros(M)])
+    @staticmethod
+    def _stack(x_ref: np.ndarray, u_ref: np.ndarray) -> np.ndarray:
+        """Warm start: the reference inputs and states with zero slacks, in the QP's stage order."""
+        return np.hstack([u_ref, x_ref[1:], np.zeros((u_ref.shape[0], 1))]).reshape(-1)

@@ -5,7 +5,6 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from autonomy.guidance.blas import blas_threads
 from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance, build_fast_mpc_qp
 from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.pdip import PdipOptions, solve_qp_pdip
@@ -35,8 +34,7 @@ def test_interior_point_matches_reference_qp(mode):
         tgt = rng.uniform(-60, 60, 2) + np.outer(k, rng.uniform(-4, 4, 2))
         others = [x0[:2] + rng.uniform(-40, 40, 2) + np.outer(k, rng.uniform(-6, 6, 2)) for _ in range(2)]
         qp = build_fast_mpc_qp(cfg, x0, u_ref, tgt, others)
-        with blas_threads(1):
-            sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, opts)
+        sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, opts)
         ref = _reference_cost(qp)
         assert abs(sol.objective - ref) <= 1e-3 * abs(ref)
         assert sol.iterations <= opts.max_iter

@@ -1,21 +1,59 @@
-"""Small dense linear-algebra helpers shared by the filters and the fusion code (plain numpy, hot-path friendly)."""
+"""Small dense linear-algebra helpers shared by the filters and the fusion code (hot-path friendly: the matrices are
+a few rows, so closed forms and compiled loops replace LAPACK wrappers whose fixed call cost dominates)."""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-__all__ = ["tria", "psd_sqrt", "symmetrise", "log_gaussian", "small_inv"]
+__all__ = ["tria", "tria_jit", "psd_sqrt", "symmetrise", "log_gaussian", "small_inv"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
-def tria(A: np.ndarray) -> np.ndarray:
-    """Triangularisation: a lower-triangular ``S`` (n × n) with ``S Sᵀ = A Aᵀ`` for ``A`` of shape (n, k), k ≥ n.
+@numba.njit(cache=True)
+def tria_jit(A: np.ndarray) -> np.ndarray:
+    """:func:`tria` for compiled callers (``A`` float64, C-contiguous)."""
+    n, k = A.shape
+    B = A.copy()  # row c of B is column c of Aᵀ, the matrix being reduced
+    p = min(n, k)
+    for j in range(p):
+        # Householder reflector H = I − τ v vᵀ (v_j = 1) mapping Aᵀ[j:, j] onto β e_j (LAPACK dlarfg's convention)
+        alpha = B[j, j]
+        ss = 0.0
+        for i in range(j + 1, k):
+            ss += B[j, i] * B[j, i]
+        if ss == 0.0:
+            continue  # already reduced: H = I
+        beta = -np.copysign(np.sqrt(alpha * alpha + ss), alpha)
+        tau = (beta - alpha) / beta
+        scale = 1.0 / (alpha - beta)
+        for i in range(j + 1, k):
+            B[j, i] *= scale
+        B[j, j] = beta
+        for c in range(j + 1, n):
+            w = B[c, j]
+            for i in range(j + 1, k):
+                w += B[j, i] * B[c, i]
+            w *= tau
+            B[c, j] -= w
+            for i in range(j + 1, k):
+                B[c, i] -= w * B[j, i]
+    S = np.zeros((n, p))
+    for c in range(n):
+        for j in range(min(c + 1, p)):
+            S[c, j] = B[c, j]
+    return S
 
-    Computed as the transpose of the R factor of the QR decomposition of ``Aᵀ`` (``Aᵀ = Q R`` ⇒ ``A Aᵀ = Rᵀ R``).
-    Diagonal signs are not normalised (they do not affect ``S Sᵀ``).
+
+def tria(A: np.ndarray) -> np.ndarray:
+    """Triangularisation: a lower-triangular ``S`` (n × min(n, k)) with ``S Sᵀ = A Aᵀ`` for ``A`` of shape (n, k).
+
+    ``Sᵀ`` is the R factor of the QR decomposition of ``Aᵀ`` (``Aᵀ = Q R`` ⇒ ``A Aᵀ = Rᵀ R``), by Householder
+    reflections with LAPACK's sign convention (compiled; :func:`tria_jit` for compiled callers). Diagonal signs are
+    not normalised (they do not affect ``S Sᵀ``).
     """
-    return np.linalg.qr(A.T, mode="r").T
+    return tria_jit(np.ascontiguousarray(A, dtype=np.float64))
 
 
 def psd_sqrt(P: np.ndarray) -> np.ndarray:

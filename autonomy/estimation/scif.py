@@ -15,16 +15,21 @@ Measurement information (``S_R S_Rᵀ = R``; χ, Z_c the centred, 1/√2n-scaled
 
 Local update: ``ĥ = ĥ⁻ + i``, ``S_h = tria([S_h⁻, S_I])``. In a team, HCMCI consensus replaces the local update
 (see ``autonomy.fusion.consensus``): use :meth:`SCIF.information` and :meth:`SCIF.set_information`.
+
+The motion and measurement models are called from Python (any model works); the dense algebra between them (moments,
+triangularisation, inverses, the information contribution) runs in compiled (numba) functions, one call per step,
+because on 6-state filters the per-call overhead of a dozen numpy/LAPACK calls exceeded the arithmetic.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from autonomy.estimation.base import GaussianFilter, Innovation
-from autonomy.estimation.linalg import psd_sqrt, tria
+from autonomy.estimation.linalg import psd_sqrt, tria, tria_jit
 from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, measurement_model
 from autonomy.estimation.sigma_point import angle_mean, cubature_points
 
@@ -47,6 +52,41 @@ class SqrtInformation:
         return self.S @ self.S.T
 
 
+@numba.njit(cache=True)
+def _information_pair(S_x: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``S_h = S_x⁻ᵀ`` and ``ĥ = S_h S_hᵀ x̂``."""
+    S_h = np.ascontiguousarray(np.linalg.inv(S_x).T)
+    return S_h, S_h @ (np.ascontiguousarray(S_h.T) @ x)
+
+
+@numba.njit(cache=True)
+def _moments(Xs: np.ndarray, W: np.ndarray, scale: float, S_Q: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Predicted ``x̂⁻ = Σ W_i X*_i``, ``S_x⁻ = tria([(X* − x̂⁻) scale, S_Q])``, ``S_h⁻``, ``ĥ⁻`` (module docstring)."""
+    n, p = Xs.shape
+    x = Xs @ W
+    A = np.empty((n, p + S_Q.shape[1]))
+    for i in range(n):
+        for j in range(p):
+            A[i, j] = (Xs[i, j] - x[i]) * scale
+        for j in range(S_Q.shape[1]):
+            A[i, p + j] = S_Q[i, j]
+    S_x = tria_jit(A)
+    S_h, h = _information_pair(S_x, x)
+    return x, S_x, S_h, h
+
+
+@numba.njit(cache=True)
+def _measurement_information(chi: np.ndarray, Zc: np.ndarray, S_h: np.ndarray, h: np.ndarray, R: np.ndarray,
+                             nu: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(S_I, i, S)`` from the scaled point deviations ``χ``, ``Z_c`` (module docstring); ``S = Z_c Z_cᵀ + R``."""
+    Pxz = chi @ np.ascontiguousarray(Zc.T)
+    S_R_inv_T = np.ascontiguousarray(np.linalg.inv(np.linalg.cholesky(R)).T)
+    S_I = (S_h @ np.ascontiguousarray(S_h.T)) @ Pxz @ S_R_inv_T
+    i = S_I @ (np.ascontiguousarray(S_R_inv_T.T) @ (nu + np.ascontiguousarray(Pxz.T) @ h))
+    return S_I, i, Zc @ np.ascontiguousarray(Zc.T) + R
+
+
 class SCIF(GaussianFilter):
     """Square-root cubature information filter (see the module docstring for the equations)."""
 
@@ -60,20 +100,17 @@ class SCIF(GaussianFilter):
 
     # --- state access -------------------------------------------------------------------------------------------
     def set_state(self, x: np.ndarray, P: np.ndarray, t: float | None = None) -> None:
-        S_x = np.linalg.cholesky(np.asarray(P, dtype=float))
-        self._S_x = S_x
-        self._S_h = np.linalg.inv(S_x).T
+        self._S_x = np.linalg.cholesky(np.asarray(P, dtype=float))
         self._x = np.array(x, dtype=float)
-        self._h = self._S_h @ (self._S_h.T @ self._x)
+        self._S_h, self._h = _information_pair(self._S_x, self._x)
         if t is not None:
             self.t = float(t)
 
     def set_information(self, info: SqrtInformation) -> None:
         """Replace the estimate by an information pair (e.g. the HCMCI result)."""
-        self._S_h = np.array(info.S, dtype=float)
+        self._S_h = np.array(info.S, dtype=float, order="C")
         self._h = np.array(info.h, dtype=float)
-        self._S_x = np.linalg.inv(self._S_h).T
-        self._x = self._S_x @ (self._S_x.T @ self._h)
+        self._S_x, self._x = _information_pair(self._S_h, self._h)
 
     @property
     def information_state(self) -> SqrtInformation:
@@ -101,14 +138,9 @@ class SCIF(GaussianFilter):
 
     def _predict(self, dt: float) -> None:
         X = self._x[:, None] + self._S_x @ self._xi
-        Xs = self.model.propagate(X, dt)
-        x = Xs @ self._W
-        A = np.hstack([(Xs - x[:, None]) * self._scale, self._sqrt_Q(dt, x)])
-        S_x = tria(A)
-        self._S_x = S_x
-        self._S_h = np.linalg.inv(S_x).T
-        self._x = x
-        self._h = self._S_h @ (self._S_h.T @ x)
+        Xs = np.ascontiguousarray(self.model.propagate(X, dt), dtype=float)
+        S_Q = np.ascontiguousarray(self._sqrt_Q(dt, Xs @ self._W), dtype=float)  # Q(x̂⁻) for state-dependent noise
+        self._x, self._S_x, self._S_h, self._h = _moments(Xs, self._W, self._scale, S_Q)
 
     def information(self, measurement: MeasurementLike, model: MeasurementModel | None = None
                     ) -> tuple[SqrtInformation, Innovation]:
@@ -123,14 +155,10 @@ class SCIF(GaussianFilter):
         Z = model.h(self._x[:, None] + chi)
         zm = angle_mean(Z, self._W, model.angle_mask)
         Zc = model.residual(Z, zm[:, None]) * self._scale
-        Pxz = (chi * self._scale) @ Zc.T
-        S_R = np.linalg.cholesky(R)
-        S_R_inv = np.linalg.inv(S_R)
-        Y = self._S_h @ self._S_h.T
-        S_I = Y @ Pxz @ S_R_inv.T
         nu = model.residual(z, zm)
-        i = S_I @ (S_R_inv @ (nu + Pxz.T @ self._h))
-        S = Zc @ Zc.T + R
+        S_I, i, S = _measurement_information(chi * self._scale, np.ascontiguousarray(Zc, dtype=float), self._S_h,
+                                             self._h, np.ascontiguousarray(R, dtype=float),
+                                             np.asarray(nu, dtype=float))
         return SqrtInformation(S_I, i), Innovation(nu, S)
 
     def update_with(self, model: MeasurementModel, z: np.ndarray, R: np.ndarray) -> Innovation:

@@ -107,14 +107,8 @@ def _compress(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Row-compressed (pointer, column, value) form of the dense ``A``; columns ascend within a row."""
     rows, cols = A.shape
     ptr = np.zeros(rows + 1, np.int64)
-    for i in range(rows):
-        cnt = 0
-        for j in range(cols):
-            if A[i, j] != 0.0:
-                cnt += 1
-        ptr[i + 1] = ptr[i] + cnt
-    idx = np.empty(ptr[rows], np.int64)
-    val = np.empty(ptr[rows])
+    idx = np.empty(rows * cols, np.int64)
+    val = np.empty(rows * cols)
     k = 0
     for i in range(rows):
         for j in range(cols):
@@ -122,7 +116,8 @@ def _compress(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 idx[k] = j
                 val[k] = A[i, j]
                 k += 1
-    return ptr, idx, val
+        ptr[i + 1] = k
+    return ptr, idx[:k], val[:k]
 
 
 @numba.njit(cache=True)
@@ -216,14 +211,15 @@ def _assemble_phi(Phi: np.ndarray, first: np.ndarray, Hp: np.ndarray, Hi: np.nda
 @numba.njit(cache=True)
 def _schur(L: np.ndarray, first: np.ndarray, reach: np.ndarray, Cp: np.ndarray, Ci: np.ndarray, Cv: np.ndarray,
            Wt: np.ndarray, lo: np.ndarray, hi: np.ndarray, Y: np.ndarray, firstY: np.ndarray) -> None:
-    """Y = C Φ⁻¹ Cᵀ = Wᵀ W with W = L⁻¹ Cᵀ (rows of ``Wt`` non-zero in [lo, hi] only), and Y's envelope.
+    """Y = C Φ⁻¹ Cᵀ = Wᵀ W with W = L⁻¹ Cᵀ (row j of ``Wt`` non-zero in [lo[j], hi[j]] only), and Y's envelope.
 
     ``reach[i]`` = min(first[i:]): once past the last non-zero of a row of C, the forward substitution stops at the
-    first i whose later rows all start beyond the last non-zero so far (no fill can reach them)."""
+    first i whose later rows all start beyond the last non-zero so far (no fill can reach them). ``lo``, ``hi`` come
+    in with the previous call's ranges (``Wt`` is zero outside them)."""
     ne, n = Wt.shape
     for j in range(ne):
         w = Wt[j]
-        for i in range(n):
+        for i in range(lo[j], hi[j] + 1):
             w[i] = 0.0
         if Cp[j + 1] == Cp[j]:
             lo[j], hi[j] = n, -1
@@ -247,7 +243,11 @@ def _schur(L: np.ndarray, first: np.ndarray, reach: np.ndarray, Cp: np.ndarray, 
         lo[j], hi[j] = start, last
     for i in range(ne):
         firstY[i] = i
-        for j in range(i + 1):
+        j0, top = 0, hi[0]  # top = max(hi[:j0 + 1]): while below lo[i], no row up to j0 meets row i
+        while j0 < i and top < lo[i]:
+            j0 += 1
+            top = max(top, hi[j0])
+        for j in range(j0, i + 1):
             a, b = max(lo[i], lo[j]), min(hi[i], hi[j])
             if a > b:
                 Y[i, j] = 0.0
@@ -366,7 +366,7 @@ def _pdip(H: np.ndarray, f: np.ndarray, C: np.ndarray, b: np.ndarray, P: np.ndar
     for i in range(n - 2, -1, -1):
         reach[i] = min(reach[i], reach[i + 1])
     L, LY, Wt = np.zeros((n, n)), np.zeros((ne, ne)), np.zeros((ne, n))
-    firstY, lo, hi = np.arange(ne), np.zeros(ne, np.int64), np.zeros(ne, np.int64)
+    firstY, lo, hi = np.arange(ne), np.zeros(ne, np.int64), np.full(ne, -1, np.int64)
     z = z0.copy()
     lam, gam = np.zeros(ne), np.ones(ni)
     s = np.empty(ni)

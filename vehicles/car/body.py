@@ -139,9 +139,14 @@ class CarBody:
 
     def read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(p_W (3,) m, q_WB (4,) xyzw, v_W (3,) m/s, omega_W (3,) rad/s) of the centre of mass."""
-        pos, q = p.getBasePositionAndOrientation(self.body_id, physicsClientId=self.client_id)
-        v, w = p.getBaseVelocity(self.body_id, physicsClientId=self.client_id)
-        return np.array(pos), np.array(q), np.array(v), np.array(w)
+        x = np.array(self.state_row())
+        return x[0:3], x[3:7], x[7:10], x[10:13]
+
+    def state_row(self) -> tuple[float, ...]:
+        """The 13 numbers of :meth:`read` in one flat tuple (p_W, q_WB, v_W, omega_W), as PyBullet reports them."""
+        (pos, q), (v, w) = (p.getBasePositionAndOrientation(self.body_id, physicsClientId=self.client_id),
+                            p.getBaseVelocity(self.body_id, physicsClientId=self.client_id))
+        return pos + q + v + w
 
     def steer_angles(self) -> tuple[float, float]:
         """Measured (left, right) knuckle angles (rad)."""

@@ -127,11 +127,8 @@ class CarFleet:
                                      f"lengths {need:.2f} m; separate their Route.start_s")
 
     def _read(self) -> None:
-        rows = [b.read() for b in self.bodies]
-        self._p_W = np.array([r[0] for r in rows])
-        self._q_WB = np.array([r[1] for r in rows])
-        self._v_W = np.array([r[2] for r in rows])
-        self._omega_z = np.array([r[3][2] for r in rows])
+        x = np.array([b.state_row() for b in self.bodies])  # (n, 13): p_W, q_WB, v_W, omega_W
+        self._p_W, self._q_WB, self._v_W, self._omega_z = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12]
         self._yaw_arr = _yaw(self._q_WB)
         self._speed = self._v_W[:, 0] * np.cos(self._yaw_arr) + self._v_W[:, 1] * np.sin(self._yaw_arr)
 

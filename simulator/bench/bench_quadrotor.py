@@ -2,7 +2,8 @@
 
 Scenario per fleet size N: UAVs on a 6 m grid at 40 m; even-numbered ones hold position, odd-numbered ones fly a
 unicycle circle (10 m/s, 0.3 rad/s). The floor is what PyBullet itself costs for the same N bare bodies with one
-force and one torque call per body per tick, measured in the same process right before.
+force and one torque call per body per tick, measured in the same process right before; the I/O floor adds the two
+calls per body and tick that read the state back (pose, velocity), which any controller flying the bodies needs.
 
 Real-time factors are simulated seconds per wall second. On a shared machine the wall time includes waiting for a
 core, so the same runs are also reported per second of this process's CPU time (``..._cpu_rtf_...``), which is close
@@ -68,8 +69,9 @@ def _fleet_rtf(n: int) -> tuple[float, float]:
         p.disconnect(cid)
 
 
-def _floor_rtf(n: int) -> tuple[float, float]:
-    """Bare PyBullet: N boxes, per tick one applyExternalForce + one applyExternalTorque per body, then a step."""
+def _floor_rtf(n: int, read_back: bool = False) -> tuple[float, float]:
+    """Bare PyBullet: N boxes, per tick one applyExternalForce + one applyExternalTorque per body, then a step (and,
+    with ``read_back``, one getBasePositionAndOrientation + one getBaseVelocity per body)."""
     cid = _client()
     try:
         a = load_airframe("survey_quad")
@@ -90,6 +92,10 @@ def _floor_rtf(n: int) -> tuple[float, float]:
                     p.applyExternalForce(b, -1, force, origin, p.LINK_FRAME, physicsClientId=cid)
                     p.applyExternalTorque(b, -1, torque, p.WORLD_FRAME, physicsClientId=cid)
                 p.stepSimulation(physicsClientId=cid)
+                if read_back:
+                    for b in ids:
+                        p.getBasePositionAndOrientation(b, physicsClientId=cid)
+                        p.getBaseVelocity(b, physicsClientId=cid)
 
         return _timed(loop)
     finally:
@@ -99,17 +105,19 @@ def _floor_rtf(n: int) -> tuple[float, float]:
 @benchmark("quadrotor_physics_rtf",
            produces=tuple(f"quad_physics_rtf_{n}uav" for n in FLEET_SIZES)
            + tuple(f"quad_physics_floor_rtf_{n}uav" for n in FLEET_SIZES)
+           + tuple(f"quad_physics_io_floor_rtf_{n}uav" for n in FLEET_SIZES)
            + tuple(f"quad_physics_cpu_rtf_{n}uav" for n in FLEET_SIZES)
-           + ("quad_physics_rtf_ratio_to_floor_10uav",))
+           + tuple(f"quad_physics_rtf_ratio_to_floor_{n}uav" for n in FLEET_SIZES))
 def quadrotor_physics_rtf() -> list[BenchRecord]:
     """Real-time factor (simulated s per wall s) of N quadrotors, physics at 240 Hz and controllers at 240/48 Hz,
-    median of REPEATS runs of SIM_SECONDS each, next to the bare-PyBullet floor for the same N."""
+    median of REPEATS runs of SIM_SECONDS each, next to the bare-PyBullet floors for the same N (the ratio to the
+    floor is the median of the per-repeat ratios, so machine load cancels)."""
     records: list[BenchRecord] = []
-    ratio_10 = None
     for n in FLEET_SIZES:
-        ours, floor, ours_cpu = [], [], []
-        for _ in range(REPEATS):  # interleaved so machine load affects both alike
+        ours, floor, io_floor, ours_cpu = [], [], [], []
+        for _ in range(REPEATS):  # interleaved so machine load affects all alike
             floor.append(_floor_rtf(n)[0])
+            io_floor.append(_floor_rtf(n, read_back=True)[0])
             wall, cpu = _fleet_rtf(n)
             ours.append(wall)
             ours_cpu.append(cpu)
@@ -117,10 +125,11 @@ def quadrotor_physics_rtf() -> list[BenchRecord]:
                                    target=TARGETS[n], better="higher"))
         records.append(BenchRecord(name=f"quad_physics_floor_rtf_{n}uav", value=statistics.median(floor), unit="x",
                                    better="higher"))
+        records.append(BenchRecord(name=f"quad_physics_io_floor_rtf_{n}uav", value=statistics.median(io_floor),
+                                   unit="x", better="higher"))
         records.append(BenchRecord(name=f"quad_physics_cpu_rtf_{n}uav", value=statistics.median(ours_cpu), unit="x",
                                    better="higher"))
-        if n == 10:
-            ratio_10 = statistics.median(o / f for o, f in zip(ours, floor, strict=True))
-    records.append(BenchRecord(name="quad_physics_rtf_ratio_to_floor_10uav", value=float(ratio_10), unit="x",
-                               better="higher"))
+        records.append(BenchRecord(name=f"quad_physics_rtf_ratio_to_floor_{n}uav",
+                                   value=statistics.median(o / f for o, f in zip(ours, floor, strict=True)), unit="x",
+                                   better="higher"))
     return records

@@ -125,7 +125,7 @@ class FastMpcConfig:
 @dataclass(frozen=True, kw_only=True)
 class FastMpcQp:
     """The stacked QP ½zᵀHz + fᵀz, Cz = b, Pz ≤ m of one solve, with the reference it was linearised about
-    (x_ref (M+1, 3), u_ref (M, 2))."""
+    (x_ref (M+1, 3), u_ref (M, 2)) and that reference as a point of z (slacks 0), the solver's warm start."""
 
     H: np.ndarray
     f: np.ndarray
@@ -135,6 +135,7 @@ class FastMpcQp:
     m: np.ndarray
     x_ref: np.ndarray
     u_ref: np.ndarray
+    z_ref: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -157,16 +158,19 @@ def euler_rollout(x0: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
 @numba.njit(cache=True)
 def _assemble(x0: np.ndarray, u_ref: np.ndarray, target_xy: np.ndarray, q: np.ndarray, dt: float, h_diag: np.ndarray,
               slack_l1: float, v_min: float, v_max: float, omega_max: float, d_sep: float, buffered: bool):
-    """(H, f, C, b, P, m, x_ref) of :func:`build_fast_mpc_qp`; ``q`` (teammates, M, 2), ``h_diag`` the Hessian
-    diagonal of one stage, ``d_sep`` = D'."""
+    """(H, f, C, b, P, m, x_ref, z_ref) of :func:`build_fast_mpc_qp`; ``q`` (teammates, M, 2), ``h_diag`` the
+    Hessian diagonal of one stage, ``d_sep`` = D'."""
     M, nq = u_ref.shape[0], q.shape[0]
     n, ns = _NB * M, 5 + nq
     xr = _rollout(x0, u_ref, dt)
     H, f = np.zeros((n, n)), np.zeros(n)
     C, b = np.zeros((_NX * M, n)), np.zeros(_NX * M)
     P, m = np.zeros((ns * M, n)), np.zeros(ns * M)
+    z_ref = np.zeros(n)
     for k in range(M):
         iu, ix, ie, row = _NB * k, _NB * k + _NU, _NB * k + _NU + _NX, _NX * k
+        z_ref[iu], z_ref[iu + 1] = u_ref[k, 0], u_ref[k, 1]
+        z_ref[ix], z_ref[ix + 1], z_ref[ix + 2] = xr[k + 1, 0], xr[k + 1, 1], xr[k + 1, 2]
         # cost: diag(2w_v, 2w_o, 2w_x, 2w_y, 2ε, 2ρ₂), linear part −2 w (x^t, y^t) and ρ₁ e
         for i in range(_NB):
             H[iu + i, iu + i] = h_diag[i]
@@ -209,7 +213,7 @@ def _assemble(x0: np.ndarray, u_ref: np.ndarray, target_xy: np.ndarray, q: np.nd
                 sg = 1.0 if px + py >= qx + qy else -1.0
                 P[rr, ix], P[rr, ix + 1] = -sg, -sg
                 m[rr] = -(sg * (qx + qy) + np.sqrt(2.0) * d_sep)
-    return H, f, C, b, P, m, xr
+    return H, f, C, b, P, m, xr, z_ref
 
 
 def build_fast_mpc_qp(c: FastMpcConfig, x0: np.ndarray, u_ref: np.ndarray, target_xy: np.ndarray,
@@ -224,12 +228,12 @@ def build_fast_mpc_qp(c: FastMpcConfig, x0: np.ndarray, u_ref: np.ndarray, targe
     u_ref = np.ascontiguousarray(u_ref, dtype=np.float64)
     q = np.ascontiguousarray(np.asarray(others_xy, dtype=np.float64).reshape(-1, M, 2))
     h_diag = 2.0 * np.array([c.w_v, c.w_o, c.w_x, c.w_y, c.theta_reg, c.slack_l2])
-    H, f, C, b, P, m, xr = _assemble(np.asarray(x0, dtype=np.float64), u_ref,
+    H, f, C, b, P, m, xr, z_ref = _assemble(np.asarray(x0, dtype=np.float64), u_ref,
                                      np.ascontiguousarray(target_xy, dtype=np.float64), q, float(c.dt), h_diag,
                                      float(c.slack_l1), float(c.v_min), float(c.v_max), float(c.omega_max),
                                      float(c.separation_distance + c.separation_margin),
                                      c.separation_mode == "buffered")
-    return FastMpcQp(H=H, f=f, C=C, b=b, P=P, m=m, x_ref=xr, u_ref=u_ref)
+    return FastMpcQp(H=H, f=f, C=C, b=b, P=P, m=m, x_ref=xr, u_ref=u_ref, z_ref=z_ref)
 
 
 class FastMpcGuidance(Guidance):
@@ -242,6 +246,10 @@ class FastMpcGuidance(Guidance):
         self._u: np.ndarray | None = None
         self._plan: np.ndarray | None = None
         self.last_qp: FastMpcQp | None = None
+        self._steps = config.dt * np.arange(1, config.horizon + 1)  # t_k − t, k = 1..M (s)
+        self._shift = np.minimum(np.arange(1, config.horizon + 1), config.horizon - 1)  # u_{k+1}, last one repeated
+        self._u_lo = np.array([config.v_min, -config.omega_max])
+        self._u_hi = np.array([config.v_max, config.omega_max])
 
     def planned_path(self) -> np.ndarray | None:
         """(M, 2) positions of the last plan at t + kT, k = 1..M (nonlinear rollout of the planned inputs) (m)."""
@@ -256,20 +264,19 @@ class FastMpcGuidance(Guidance):
         x0 = np.array([own.p_W[0], own.p_W[1], own.course(min_speed=0.5)])
         if target is None:
             return UnicycleSetpoint(speed=c.v_min, heading_rate=0.0, altitude=alt)
-        tk = t + c.dt * np.arange(1, c.horizon + 1)
+        tk = t + self._steps
         if self._u is None:
-            u_ref = np.tile([float(np.clip(own.speed, c.v_min, c.v_max)), 0.0], (c.horizon, 1))
+            u_ref = np.tile([min(max(own.speed, c.v_min), c.v_max), 0.0], (c.horizon, 1))
         else:
-            u_ref = np.vstack([self._u[1:], self._u[-1:]])
+            u_ref = self._u[self._shift]
             if self._plan is not None:  # keep θ on the plan's branch
-                x0[2] += 2 * np.pi * np.round((self._plan[1, 2] - x0[2]) / (2 * np.pi))
+                x0[2] += 2 * np.pi * round((self._plan[1, 2] - x0[2]) / (2 * np.pi))
         u_ref[:, 0] = np.clip(u_ref[:, 0], max(c.v_min, c.linearization_min_speed), c.v_max)
         others = [tm.predict_xy(tk) for tm in teammates if abs(tm.p_W[2] - own.p_W[2]) <= c.altitude_tolerance]
         qp = build_fast_mpc_qp(c, x0, u_ref, target.predict_xy(tk), others)
         self.last_qp = qp
-        z0 = self._stack(qp.x_ref, u_ref)
         t0, c0 = time.perf_counter(), time.thread_time()
-        sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, c.pdip, z0=z0)
+        sol = solve_qp_pdip(qp.H, qp.f, qp.C, qp.b, qp.P, qp.m, c.pdip, z0=qp.z_ref)
         self.stats.solve_times_s.append(time.perf_counter() - t0)
         self.stats.solve_cpu_times_s.append(time.thread_time() - c0)
         self.stats.solves += 1
@@ -282,12 +289,7 @@ class FastMpcGuidance(Guidance):
             self.stats.failures += 1
             self.stats.fallbacks_shifted += 1
             u = u_ref
-        u = np.column_stack([np.clip(u[:, 0], c.v_min, c.v_max), np.clip(u[:, 1], -c.omega_max, c.omega_max)])
+        u = np.clip(u, self._u_lo, self._u_hi)
         self._u = u
         self._plan = euler_rollout(x0, u, c.dt)
         return UnicycleSetpoint(speed=float(u[0, 0]), heading_rate=float(u[0, 1]), altitude=alt)
-
-    @staticmethod
-    def _stack(x_ref: np.ndarray, u_ref: np.ndarray) -> np.ndarray:
-        """Warm start: the reference inputs and states with zero slacks, in the QP's stage order."""
-        return np.hstack([u_ref, x_ref[1:], np.zeros((u_ref.shape[0], 1))]).reshape(-1)

@@ -174,13 +174,11 @@ class TeammateState:
         t = np.asarray(t, dtype=float).reshape(-1)
         if self.plan_p_W is None:
             return self.p_W[:2] + np.outer(t - self.t, self.v_W[:2])
-        k = self.plan_p_W.shape[0]
-        tk = self.t + self.plan_dt * np.arange(k + 1)
-        pts = np.vstack([self.p_W[:2], self.plan_p_W[:, :2]])
-        out = np.column_stack([np.interp(t, tk, pts[:, 0]), np.interp(t, tk, pts[:, 1])])
-        v_end = (pts[-1] - pts[-2]) / self.plan_dt
-        late = t > tk[-1]
-        out[late] = pts[-1] + np.outer(t[late] - tk[-1], v_end)
-        early = t < tk[0]
-        out[early] = pts[0] + np.outer(t[early] - tk[0], self.v_W[:2])
+        pts = np.vstack([self.p_W[:2], self.plan_p_W[:, :2]])  # point j at t + j·plan_dt
+        s = (t - self.t) / self.plan_dt
+        j = np.clip(np.floor(s), 0, pts.shape[0] - 2).astype(np.intp)  # the last segment also extrapolates
+        out = pts[j] + (s - j)[:, None] * (pts[j + 1] - pts[j])
+        early = s < 0
+        if early.any():
+            out[early] = pts[0] + np.outer(t[early] - self.t, self.v_W[:2])
         return out

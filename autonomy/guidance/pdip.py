@@ -26,7 +26,7 @@ with two Cholesky factorisations. Choices the paper leaves open (recorded here):
 
 Linear algebra (the QPs have a few dozen variables and are solved hundreds of times per second, so fixed per-call
 costs, not arithmetic, decide the time): the whole iteration is one function compiled by numba (``cache=True``: the
-compilation, a few seconds, is paid once per machine). H, C and P are taken dense and stored row-compressed once per
+compilation, about ten seconds, is paid once per machine). H, C and P are taken dense and stored row-compressed once per
 solve, so every product costs their number of non-zeros. Φ and Y = C Φ⁻¹ Cᵀ are factorised by *envelope* (profile)
 Cholesky: row i of a factor is stored from the first column that is structurally non-zero in row i of the matrix,
 and a Cholesky factor never fills outside that envelope. Φ's envelope follows from the patterns of H and of the rows
@@ -452,7 +452,8 @@ def solve_qp_pdip(H: np.ndarray, f: np.ndarray, C: np.ndarray, b: np.ndarray, P:
     Raises
     ------
     numpy.linalg.LinAlgError
-        Φ or C Φ⁻¹ Cᵀ lost positive definiteness even after the fallback shift (e.g. C rank deficient).
+        Φ or C Φ⁻¹ Cᵀ is not positive definite even after the fallback shift (e.g. C = 0, or non-finite data;
+        a merely rank-deficient C is absorbed by the shift).
     """
     H = np.ascontiguousarray(H, dtype=np.float64)
     n = H.shape[0]
@@ -464,7 +465,8 @@ def solve_qp_pdip(H: np.ndarray, f: np.ndarray, C: np.ndarray, b: np.ndarray, P:
                                            float(options.regularization), float(options.slack_floor),
                                            float(options.tol))
     if status:
-        raise np.linalg.LinAlgError("interior point: the Newton system is not positive definite (is C full rank?)")
+        raise np.linalg.LinAlgError("interior point: the Newton system is not positive definite even after the "
+                                    "fallback shift (C = 0? non-finite data?)")
     obj = float(0.5 * z @ H @ z + f @ z)
     return QpResult(z=z, lam=lam, gam=gam, s=s, iterations=int(it), converged=bool(res < options.tol), objective=obj,
                     residual=float(res))

@@ -18,23 +18,43 @@ positions q_j,k come from their shared plans (or constant-velocity extrapolation
 with an exact L1 penalty, so the problem is always feasible; the slack is zero whenever the hard problem is feasible
 and the penalty is large enough. The plan is 2-D at a fixed altitude clamped into the configured band.
 
-Solver choice. The cost is a sum of squares, so both solvers get its Gauss–Newton Hessian σ J_Rᵀ J_R (+ 1e-6 I;
-constraint curvature ignored): positive semi-definite by construction. With CasADi's exact Hessian the SQP had to
-regularise an indefinite matrix and needed 18–50 iterations from a cold start. Measured on the benchmark problem
-(2 UAVs, N = 20, warm-started from the shifted plan, closed loop around a moving target, 2-core shared machine):
+Solver choice. The cost is a sum of squares; its Gauss–Newton Hessian σ J_Rᵀ J_R (+ 1e-6 I) is positive
+semi-definite by construction. With CasADi's exact Hessian the SQP had to regularise an indefinite matrix and needed
+18–50 iterations from a cold start. Measured on the benchmark problem (2 UAVs, N = 20, warm-started from the shifted
+plan, closed loop around a moving target, 2-core shared machine):
 
-- ``sqpmethod`` + ``qrqp`` (default, "sqp"): median 3 iterations, ≈ 1.1 ms p50 wall, ≈ 1.5 ms p95 CPU time;
+- ``sqpmethod`` + ``qrqp`` (default, "sqp"): median 3 iterations, ≈ 1.8 ms p50 / 2.5 ms p95 CPU with the Gauss–Newton
+  Hessian, ≈ 2.1 / 3.4 ms with the constraint-curvature Hessian below (its eigenvalue clipping costs ≈ 0.35 ms);
 - IPOPT warm-started (``print_level 0``, ``sb yes``, same Hessian): ≈ 15 iterations, ≈ 6–13 ms p50 — the barrier
   method restarts from an interior point every call and cannot exploit the active-set warm start;
 - one real-time iteration ("rti"): ≈ 0.4–0.7 ms and as accurate as "sqp" around a free orbit, but in the town
   scenario with building keep-outs it diverged (mean standoff error of hundreds of metres): not robust enough as
   the default.
 
-SQP + qrqp is the default; all three remain available by ``NmpcConfig.solver``. An SQP stopped by its iteration
-cap whose iterate satisfies all constraints within 1e-3 is used (counted in ``stats.inexact``). Gauss–Newton ignores
-the curvature of the dynamics; from a cold start far from the orbit (e.g. a saturated turn) the SQP then cycles, so a
-cold start (no plan to shift: the first call and after a vector-field fallback) is solved by IPOPT with the exact
-Hessian (≈ 10–30 ms, rare), whose plan then warm-starts the fast solver.
+Why the SQP stalled in ``road_standoff`` (physics, radar estimates of a stop-and-go car; seed 2, 40 s: 41 of 156
+warm solves capped at 30 iterations, 31 retried by IPOPT, none with a building constrained — at 60–70 m every
+building of that town is flown over): the UAVs there sit on their speed bounds for the whole horizon chasing a
+20–30° phase error, so the dynamics' multipliers (costates) are large and the residuals are far from zero. The
+Gauss–Newton model then misses the curvature λᵀ∇²f_d of the heading dynamics; the QP steps zig-zag the heading rate
+along the horizon, the line search fails ("3F" in CasADi's log) and the iterates cycle with a constraint violation
+of ≈ 0.1–10 that the iteration cap never clears; IPOPT with the exact Hessian converged on the same problems in
+≈ 12–18 iterations. The QP solver is not the cause (qpOASES and DAQP stalled on the same problems). Hence the default
+``hessian="constraint_curvature"``: the Gauss–Newton cost Hessian plus the exact curvature Σ λ_j ∇²g_j of the
+dynamics and constraints, made positive definite by CasADi's block-wise eigenvalue clipping. Near a solution with
+negative curvature the clipped model converges only linearly, so the cap is 15 iterations and a capped iterate that
+satisfies all constraints within 1e-3 is used (counted in ``stats.inexact``): the next call continues from it. Same
+runs (thread CPU time of the solver calls, seeds 2 / 3): IPOPT retries 31 / 22 → 5 / 3, fast-solve p95 54 / 56 ms →
+16 / 14 ms, NMPC time per 40 s run 2.95 / 2.67 s → 1.66 / 1.55 s, standoff and phase errors unchanged.
+
+The slack of the soft constraints is a decision variable scaled by ``slack_l1`` (cost units), so its bound
+multiplier is O(1) and does not inflate the L1-merit penalty of the line search (CasADi sets it from the largest
+multiplier); unused teammate / building slots contribute rows 1 + s ≥ 0 that can never bind, not duplicates of the
+slack's bound. Warm starts shift the previous plan, extend its tail through the model under the last control (a
+dynamically consistent guess) and shift its multipliers with it; after an IPOPT solve only the multipliers of active
+constraints and bounds are kept. Gauss–Newton ignores the curvature of the dynamics; from a cold start far from the
+orbit (e.g. a saturated turn) the SQP then cycles, so a cold start (no plan to shift: the first call and after a
+vector-field fallback) is solved by IPOPT with the exact Hessian (≈ 10–30 ms, rare), whose plan then warm-starts the
+fast solver. A warm solve that still fails is retried once by that IPOPT (``NmpcConfig.robust_retry``).
 
 Failures (solver status not successful, exception, non-finite output, injected by :meth:`inject_failures`, or a
 time-budget overrun when enforced) never raise: the command comes from the previous successful plan shifted by the
@@ -109,6 +129,7 @@ class NmpcStandoffGuidance(Guidance):
         self._fallback = VectorFieldGuidance(config.fallback_config(), slot=self.slot)
         self._guess_law = VectorFieldGuidance(config.fallback_config(), slot=self.slot)  # cold-start guesses only
         self._n_tm = max(config.team_size - 1, 0)
+        self._slack_scale = max(config.weights.slack_l1, 1.0)
         self._build()
         self._w0: np.ndarray | None = None
         self._lam_g0: np.ndarray | None = None
@@ -137,6 +158,8 @@ class NmpcStandoffGuidance(Guidance):
             tms.append((P[off], P[off + 1], P[off + 2], ca.reshape(P[off + 3:off + 3 + 2 * n], 2, n)))
             off += _TM_PAR + 2 * n
         bls = [P[off + i * _B_PAR: off + (i + 1) * _B_PAR] for i in range(nb)]
+        kappa = self._slack_scale
+        Sk = S / kappa  # the slack in constraint units; the decision variable is kappa times it (see _slack_scale)
         rd2 = c.standoff_radius ** 2
         vmax, wmax = c.speed_deviation, c.max_heading_rate
         w_nom = c.direction * c.nominal_speed / c.standoff_radius
@@ -167,14 +190,14 @@ class NmpcStandoffGuidance(Guidance):
                         uj = rj / ca.sqrt(ca.sumsqr(rj) + 1.0)
                         ujr = ca.vertcat(cph * uj[0] - sph * uj[1], sph * uj[0] + cph * uj[1])
                         res += [scale * act * (u_me[0] - ujr[0]), scale * act * (u_me[1] - ujr[1])]
-                    g.append(act * (ca.sumsqr(p - Q[:, k]) / c.separation_distance ** 2 - 1) + S[k])
+                    g.append(act * (ca.sumsqr(p - Q[:, k]) / c.separation_distance ** 2 - 1) + (1 - act) + Sk[k])
             for bp in bls:
                 d = p - bp[1:3]
                 lx = (bp[3] * d[0] + bp[4] * d[1]) * bp[5]
                 ly = (-bp[4] * d[0] + bp[3] * d[1]) * bp[6]
-                g.append(bp[0] * (lx ** 2 + ly ** 2 - 1) + S[k])
-            res.append(np.sqrt(2 * w.slack_l2) * S[k])
-            lin += w.slack_l1 * S[k]
+                g.append(bp[0] * (lx ** 2 + ly ** 2 - 1) + (1 - bp[0]) + Sk[k])
+            res.append(np.sqrt(2 * w.slack_l2) * Sk[k])
+            lin += w.slack_l1 * Sk[k]
         wvar = ca.vertcat(ca.vec(X), ca.vec(U), S)
         R = ca.vertcat(*res)
         J = 0.5 * ca.sumsqr(R) + lin
@@ -186,6 +209,8 @@ class NmpcStandoffGuidance(Guidance):
         g_all = ca.vertcat(*g)
         self._n_g = int(g_all.shape[0])
         lam_g = ca.SX.sym("lam_g", self._n_g)
+        if c.hessian == "constraint_curvature" and c.solver != "ipopt":
+            H_gn = H_gn + ca.hessian(ca.dot(lam_g, g_all), wvar)[0]
         H_out = ca.triu(H_gn) if self.config.solver == "ipopt" else H_gn  # IPOPT takes the upper triangle
         hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [H_out])
         nlp = {"x": wvar, "p": P, "f": J, "g": g_all}
@@ -221,6 +246,8 @@ class NmpcStandoffGuidance(Guidance):
                 "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
                 "hess_lag": hess, "max_iter": 1 if c.solver == "rti" else c.max_iter,
                 "tol_pr": 1e-5, "tol_du": 1e-2, "error_on_fail": False}
+        if c.hessian == "constraint_curvature":
+            opts.update(convexify_strategy="eigen-clip", convexify_margin=1e-6)
         return "sqpmethod", nlp, opts
 
     # ------------------------------------------------------------------ public API
@@ -321,12 +348,14 @@ class NmpcStandoffGuidance(Guidance):
                        teammates: Sequence[TeammateState]) -> np.ndarray:
         c = self.config
         n = c.horizon
-        if self._w0 is not None and self._plan_t is not None:
-            shift = int(round((t - self._plan_t) / c.dt))
-            if 0 <= shift < n:
-                X = np.vstack([self._plan_x[1 + shift:], np.repeat(self._plan_x[-1:], shift, axis=0)])
-                U = np.vstack([self._plan_u[shift:], np.repeat(self._plan_u[-1:], shift, axis=0)])
-                return np.concatenate([X.reshape(-1), U.reshape(-1), np.zeros(n)])
+        shift = self._shift(t)
+        if shift is not None:
+            # the tail is extended by the model under the last control: a guess that satisfies the dynamics
+            X, U = list(self._plan_x[1 + shift:]), np.vstack([self._plan_u[shift:], np.repeat(self._plan_u[-1:], shift,
+                                                                                               axis=0)])
+            for _ in range(shift):
+                X.append(np.asarray(self._f_d(X[-1], U[-1])).reshape(-1))
+            return np.concatenate([np.asarray(X).reshape(-1), U.reshape(-1), np.zeros(n)])
         # cold start: roll the vector-field law forward through the prediction model (a good, smooth guess)
         xs, us, x = [], [], np.array(x0, dtype=float)
         for k in range(n):
@@ -341,6 +370,35 @@ class NmpcStandoffGuidance(Guidance):
             us.append(u)
         return np.concatenate([np.array(xs).reshape(-1), np.array(us).reshape(-1), np.zeros(n)])
 
+    def _shift(self, t: float) -> int | None:
+        """Whole steps from the last plan to ``t`` when that plan can warm-start the solve at ``t``, else ``None``."""
+        if self._w0 is None or self._plan_t is None:
+            return None
+        shift = int(round((t - self._plan_t) / self.config.dt))
+        return shift if 0 <= shift < self.config.horizon else None
+
+    def _shifted_multipliers(self, shift: int) -> tuple[np.ndarray, np.ndarray]:
+        """The last solve's multipliers (lam_g, lam_x) moved ``shift`` steps earlier, the last step's repeated."""
+        n = self.config.horizon
+
+        def sh(a: np.ndarray) -> np.ndarray:
+            a = a.reshape(n, -1)
+            return np.vstack([a[shift:], np.repeat(a[-1:], shift, axis=0)]).reshape(-1)
+
+        lx = self._lam_x0
+        lam_x = np.concatenate([sh(lx[:_NX * n]), sh(lx[_NX * n:(_NX + _NU) * n]), sh(lx[(_NX + _NU) * n:])])
+        return sh(self._lam_g0), lam_x
+
+    def _active_multipliers(self, w: np.ndarray, gv: np.ndarray, lam_g: np.ndarray,
+                            lam_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Interior-point multipliers with those of inactive inequalities and bounds zeroed (all are nonzero in an
+        interior point solution, and would seed the active-set QP with a huge active set)."""
+        tol = 1e-6
+        act_g = ~np.isfinite(self._ubg) & (gv - self._lbg > tol)
+        lam_g = np.where(act_g, 0.0, lam_g)
+        at_bound = (w - self._lbx <= tol) | (self._ubx - w <= tol)
+        return lam_g, np.where(at_bound, lam_x, 0.0)
+
     def _feasible_slacks(self, w0: np.ndarray, par: np.ndarray) -> np.ndarray:
         """Slacks s_k = max(0, −min_j h_j,k) that make the soft constraints of the guess ``w0`` hold (N,)."""
         n = self.config.horizon
@@ -349,7 +407,7 @@ class NmpcStandoffGuidance(Guidance):
         gv = np.asarray(self._g_fun(w, par)).reshape(n, -1)[:, _NX:]
         if gv.shape[1] == 0:
             return np.zeros(n)
-        return np.maximum(0.0, -gv.min(axis=1))
+        return self._slack_scale * np.maximum(0.0, -gv.min(axis=1))
 
     def _solve(self, x0: np.ndarray, par: np.ndarray, t: float, target: TargetEstimate,
                teammates: Sequence[TeammateState], robust: bool = False) -> tuple[bool, float, str]:
@@ -360,8 +418,9 @@ class NmpcStandoffGuidance(Guidance):
         w0 = self._initial_guess(x0, t, target, teammates)
         w0[-n:] = self._feasible_slacks(w0, par)
         args = {"x0": w0, "p": par, "lbx": self._lbx, "ubx": self._ubx, "lbg": self._lbg, "ubg": self._ubg}
-        if self._lam_g0 is not None and not robust:
-            args["lam_g0"], args["lam_x0"] = self._lam_g0, self._lam_x0
+        shift = self._shift(t)
+        if self._lam_g0 is not None and shift is not None and not robust:
+            args["lam_g0"], args["lam_x0"] = self._shifted_multipliers(shift)
         # a cold start (no plan to shift) goes to the robust exact-Hessian IPOPT, warm starts to the fast solver
         solver = self._cold_solver if self._w0 is None or robust else self._solver
         t0, c0 = time.perf_counter(), time.thread_time()
@@ -392,11 +451,11 @@ class NmpcStandoffGuidance(Guidance):
         self._plan_x = np.vstack([x0, X])
         self._plan_u = U
         self._w0 = w
-        if solver is self._solver:
-            self._lam_g0 = np.asarray(sol["lam_g"]).reshape(-1)
-            self._lam_x0 = np.asarray(sol["lam_x"]).reshape(-1)
-        else:  # interior-point multipliers are all nonzero: they would seed the active-set QP with a huge active set
-            self._lam_g0 = self._lam_x0 = None
+        self._lam_g0 = np.asarray(sol["lam_g"]).reshape(-1)
+        self._lam_x0 = np.asarray(sol["lam_x"]).reshape(-1)
+        if solver is not self._solver:
+            self._lam_g0, self._lam_x0 = self._active_multipliers(w, np.asarray(sol["g"]).reshape(-1), self._lam_g0,
+                                                                  self._lam_x0)
         return True, t_solve, status
 
     def _fall_back(self, own: OwnState, target: TargetEstimate, teammates: Sequence[TeammateState],

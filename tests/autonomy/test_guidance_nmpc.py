@@ -138,3 +138,45 @@ def test_failed_fast_solve_is_retried_with_the_robust_solver(retry):
     if retry:  # the command is the robust solve's first input, not a shifted plan
         np.testing.assert_allclose([sp.speed, sp.heading_rate], g._plan_u[0])
         assert g._plan_t == 0.5
+
+
+@pytest.mark.parametrize("hessian", ["gauss_newton", "constraint_curvature"])
+def test_both_hessians_hold_standoff_and_phase(hessian):
+    cfg = NmpcConfig(standoff_radius=RD, hessian=hessian)
+    laws = [NmpcStandoffGuidance(cfg, 0), NmpcStandoffGuidance(cfg, 1)]
+    x0 = np.array([[150.0, 20.0, 1.5, 12.0, 0.0], [-100.0, -90.0, 0.0, 12.0, 0.0]])
+    res = run_kinematic_loop(laws, x0, LoopConfig(dt=0.5, steps=240, target_v=(4.0, 1.0)))
+    err_ph = np.degrees(np.abs(wrap_angle(res.phases[-80:, 1] - res.phases[-80:, 0] - np.pi)))
+    assert np.abs(res.ranges[-80:] - RD).max() < 0.02 * RD and err_ph.max() < 5.0
+    assert sum(law.stats.retries for law in laws) == 0
+    with pytest.raises(ValueError, match="hessian"):
+        NmpcConfig(hessian="bfgs")
+
+
+def test_unused_constraint_slots_never_bind():
+    """Rows of absent teammates and buildings are 1 + s >= 0, not copies of the slack bound s >= 0."""
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, max_buildings=3), 0, buildings=())
+    own, tgt, _ = _states(0.0)
+    x0 = g._initial_state(own, 0.0)
+    par = g._parameters(x0, own, tgt, [], 0.0)  # no teammate, no building
+    w = g._initial_guess(x0, 0.0, tgt, [])
+    gv = np.asarray(g._g_fun(w, par)).reshape(g.config.horizon, -1)[:, 5:]
+    np.testing.assert_allclose(gv, 1.0)
+    np.testing.assert_allclose(g._feasible_slacks(w, par), 0.0)
+
+
+def test_warm_start_is_dynamically_consistent_and_shifts_multipliers():
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD), 0)
+    g.command(*_states(0.0), 0.0)  # cold start (IPOPT): active multipliers only
+    g.command(*_states(0.5), 0.5)  # warm SQP
+    n = g.config.horizon
+    w = g._initial_guess(g._plan_x[1], 1.5, *_states(1.5)[1:])  # two steps later: two tail steps rolled out
+    X = w[: 5 * n].reshape(n, 5)
+    U = w[5 * n: 7 * n].reshape(n, 2)
+    np.testing.assert_allclose(X[:-2], g._plan_x[3:])
+    for k in (n - 2, n - 1):
+        np.testing.assert_allclose(X[k], np.asarray(g._f_d(X[k - 1], U[k])).reshape(-1), atol=1e-12)
+    lam_g, lam_x = g._shifted_multipliers(2)
+    rows = g._lam_g0.reshape(n, -1)
+    np.testing.assert_allclose(lam_g.reshape(n, -1)[: n - 2], rows[2:])
+    np.testing.assert_allclose(lam_x[5 * n: 7 * n].reshape(n, 2)[: n - 2], g._lam_x0[5 * n: 7 * n].reshape(n, 2)[2:])

@@ -33,6 +33,19 @@ Beyond the paper, ``SearchConfig.tail_steps > 0`` measures the candidate's remai
 later, grown without new observations, which charges a candidate for the frontier it leaves behind (the paper's
 cost is ``tail_steps = 0``, the default).
 
+Beyond the paper, obstacle clearance holds by construction (``SearchConfig.loiter_safety``, on by default; the
+cost above is unchanged). The soft term ``J_s`` only discourages the end of the held-control rollout from
+approaching an obstacle; with a bounded turn a UAV can still reach a state from which every admissible turn
+sequence hits one (the reproduction measured approaches to 0 m with ``J_s`` alone). So only candidates whose
+*next* state — the one actually flown, ``(p_{k+1}, psi + u)`` — is safe in the sense of
+:mod:`autonomy.guidance.search.safety` are admissible: the full-left or the full-right maximum-turn loiter from
+that state keeps ``d_col + clearance_margin`` from every obstacle footprint. The cost is still evaluated on the
+held-control rollout; admissibility only filters which grid values may win. If the current state is safe, its
+own loiter turn ``+-u_max`` (always on the grid) is admissible, so by induction every flown chord keeps the
+clearance for all time from a safe start (:class:`~autonomy.guidance.search.mission.SearchMission` draws its
+starts until safe). From an unsafe start with no admissible candidate the planner takes the candidate of largest
+clearance and flags the decision (``SearchDecision.safe`` is False).
+
 Team order (section IV-B): within each connected component of the communication graph the lowest index decides
 first, then the others in breadth-first order, each one using the plans of its direct neighbours that decided
 before it.
@@ -50,6 +63,7 @@ from shapely.geometry.base import BaseGeometry
 
 from autonomy.estimation.setmem import polygons as pg
 from autonomy.estimation.setmem.estimator import SetEstimate
+from autonomy.guidance.search.safety import LoiterSafety
 from autonomy.sensing.scene import SensorPose
 from worlds.geometry import Building
 
@@ -99,6 +113,11 @@ class SearchConfig:
         of the frontier it leaves behind: ``phi((S_{k+h} (+) B(tail r)) n X_s)``.
     altitude_gain : float
         Proportional gain of the vertical velocity set-point on the altitude error (1/s), >= 0.
+    loiter_safety : bool
+        Admit only controls whose next state has a safe maximum-turn loiter (module docstring; beyond the paper).
+        False: the paper's planner, clearance left to ``J_s``.
+    clearance_margin : float
+        Margin over ``d_col`` the safe loiters keep from every obstacle (m), >= 0.
     """
 
     speed: float = 60.0 / 3.6
@@ -117,12 +136,15 @@ class SearchConfig:
     window_margin: float = 10.0
     tail_steps: int = 0
     altitude_gain: float = 1.0
+    loiter_safety: bool = True
+    clearance_margin: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("speed", "altitude", "dt", "max_target_speed", "alpha_s2"):
             if not (getattr(self, name) > 0):
                 raise ValueError(f"SearchConfig.{name} must be > 0, got {getattr(self, name)}")
-        for name in ("alpha_m", "alpha_d", "alpha_s", "d_col", "window_margin", "altitude_gain"):
+        for name in ("alpha_m", "alpha_d", "alpha_s", "d_col", "window_margin", "altitude_gain",
+                     "clearance_margin"):
             if not (getattr(self, name) >= 0):
                 raise ValueError(f"SearchConfig.{name} must be >= 0, got {getattr(self, name)}")
         if not (0 < self.max_turn <= np.pi):
@@ -186,6 +208,12 @@ class SearchDecision:
         ``J`` of every candidate, in the order of ``controls``.
     controls : np.ndarray
         The candidate heading changes (rad).
+    admissible : np.ndarray
+        (n_controls,) bool: the candidate's next state is safe (all True without ``loiter_safety``).
+    clearance : float
+        Loiter clearance of the chosen next state (m); ``inf`` without obstacles or without ``loiter_safety``.
+    safe : bool
+        The chosen candidate is admissible; False only when none was (possible only from an unsafe state).
     """
 
     u: float
@@ -194,6 +222,9 @@ class SearchDecision:
     terms: dict[str, float]
     costs: np.ndarray
     controls: np.ndarray
+    admissible: np.ndarray
+    clearance: float = np.inf
+    safe: bool = True
 
 
 def yaw_quaternion(yaw: float) -> np.ndarray:
@@ -241,14 +272,18 @@ class SearchPlanner:
     free_area : BaseGeometry
         ``X_s`` (m).
     obstacles : Sequence[Building]
-        Obstacles of the risk term.
+        Obstacles of the risk term and of the safe-loiter constraint.
     footprint_radius : float
         Radius (m) of a disc around the UAV containing every region it can observe; with the box sensor this is
         the half-diagonal of the footprint, ``sqrt(2) h tan(opening / 2)``.
+    keep_in : BaseGeometry | None
+        Area the UAVs must stay inside (m), enforced by the safe-loiter constraint like an obstacle; ``None``
+        (the paper's missions) leaves them free to fly beyond the search area.
     """
 
     def __init__(self, config: SearchConfig, sensor: RegionModel, free_area: BaseGeometry,
-                 obstacles: Sequence[Building] = (), footprint_radius: float = 60.0):
+                 obstacles: Sequence[Building] = (), footprint_radius: float = 60.0,
+                 keep_in: BaseGeometry | None = None):
         if not (footprint_radius > 0):
             raise ValueError(f"SearchPlanner.footprint_radius must be > 0 m, got {footprint_radius}")
         self.config = config
@@ -261,6 +296,10 @@ class SearchPlanner:
             shapely.union_all([shapely.Polygon(b.footprint) for b in obstacles]) if obstacles else pg.EMPTY
         )
         shapely.prepare(self.free_area)
+        self.safety = LoiterSafety(
+            speed=config.speed, dt=config.dt, max_turn=config.max_turn, required=config.d_col + config.clearance_margin,
+            obstacles=self._obstacles, keep_in=keep_in,
+        ) if config.loiter_safety else None
 
     def region(self, p_xy: np.ndarray, yaw: float) -> BaseGeometry:
         """Observed region from a horizontal position (m) and heading (rad) at the flight altitude."""
@@ -341,11 +380,17 @@ class SearchPlanner:
         Jd = self._distance_term(estimate, p0, p_end)
         Js = self.obstacle_risk(p_end)
         J = Jm + cfg.alpha_d * Jd + cfg.alpha_s * Js
-        best = int(np.argmin(J))
+        clearance = np.full(len(controls), np.inf)
+        if self.safety is not None and self.safety.active:
+            clearance = self.safety.clearance(np.array([path.p_xy[0] for path in paths]),
+                                              np.array([path.yaw[0] for path in paths]))
+        admissible = self.safety.admits(clearance) if self.safety is not None else np.ones(len(J), dtype=bool)
+        safe = bool(admissible.any())
+        best = int(np.argmin(np.where(admissible, J, np.inf))) if safe else int(np.argmax(clearance))
         return SearchDecision(
             u=float(controls[best]), path=paths[best], cost=float(J[best]),
             terms={"J_m": float(Jm[best]), "J_d": float(Jd[best]), "J_s": float(Js[best])},
-            costs=J, controls=controls,
+            costs=J, controls=controls, admissible=admissible, clearance=float(clearance[best]), safe=safe,
         )
 
     def plan_team(self, p_xy: np.ndarray, headings: np.ndarray, estimates: Sequence[SetEstimate],

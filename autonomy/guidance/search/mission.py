@@ -9,8 +9,14 @@ No physics engine: each step of ``T`` seconds
    :class:`~autonomy.sensing.fake_scene.FakeScene` of the obstacles, then predicts and corrects its sets;
 4. UAVs linked by an unobstructed line of sight (obstacles are at least as tall as the UAVs fly, so a 2-D
    segment test) fuse their post-correction sets;
-5. the guarantee (every true target inside ``X U Xbar`` of every UAV), the areas and the decoys inside ``X`` are
-   recorded.
+5. the guarantee (every true target inside ``X U Xbar`` of every UAV), the areas, the decoys inside ``X`` and the
+   distance from each UAV's flown chord to the obstacles are recorded.
+
+UAV starts are uniform free points ``alpha_s1 + 2 alpha_s2`` inside the free area with uniform headings; with
+``MissionConfig.safe_starts`` (the default) each start whose state is not safe in the sense of
+:mod:`~autonomy.guidance.search.safety` is redrawn (position and heading, from the same generator), so the
+planner's safe-loiter constraint (``SearchConfig.loiter_safety``) holds from the first step and no flown chord
+comes within ``d_col`` of an obstacle. ``safe_starts=False`` keeps the first draw.
 
 The mission is the harness of the search tests and benchmarks; :class:`MissionResult` carries every figure the
 paper reports except run time, which benchmarks measure.
@@ -28,6 +34,7 @@ from autonomy.estimation.setmem import polygons as pg
 from autonomy.estimation.setmem.estimator import SetMembershipConfig, SetMembershipEstimator, free_search_area
 from autonomy.guidance.search.planner import SearchConfig, SearchPlanner, yaw_quaternion
 from autonomy.guidance.search.regions import PrismViewRegion
+from autonomy.guidance.search.safety import LoiterSafety
 from autonomy.guidance.search.scenario import MoverConfig, random_cuboids, random_free_points, random_movers
 from autonomy.sensing.box_sensor import BoxSensor, BoxSensorConfig
 from autonomy.sensing.fake_scene import FakeScene
@@ -63,6 +70,9 @@ class MissionConfig:
         Target and decoy motion; its ``dt`` must equal ``search.dt``.
     sensor : BoxSensorConfig
         The nadir bounded-error sensor.
+    safe_starts : bool
+        Redraw UAV starts until their maximum-turn loiters keep ``search.d_col + search.clearance_margin`` from
+        the obstacles (module docstring); needed by the planner's safe-loiter induction.
     """
 
     area_size: tuple[float, float] = (500.0, 500.0)
@@ -78,6 +88,7 @@ class MissionConfig:
     estimator: SetMembershipConfig = field(default_factory=SetMembershipConfig)
     movers: MoverConfig = field(default_factory=MoverConfig)
     sensor: BoxSensorConfig = field(default_factory=BoxSensorConfig)
+    safe_starts: bool = True
 
     def __post_init__(self) -> None:
         if not all(s > 0 for s in self.area_size):
@@ -117,9 +128,13 @@ class MissionResult:
     mover_xy : np.ndarray
         (steps + 1, n_targets + n_decoys, 2) target then decoy positions (m).
     min_obstacle_distance : np.ndarray
-        (steps, n_uavs) horizontal distance from each UAV to the nearest obstacle (m); ``inf`` without obstacles.
+        (steps, n_uavs) horizontal distance from the chord each UAV flew during the step (from its previous to its
+        new position) to the nearest obstacle (m); ``inf`` without obstacles.
     links : np.ndarray
         (steps,) number of line-of-sight links.
+    unsafe_decisions : np.ndarray
+        (steps, n_uavs) bool: the search MPC found no candidate with a safe next state and took the one of largest
+        clearance (never from a safe start; always False for random turns or without ``loiter_safety``).
     """
 
     area_X: np.ndarray
@@ -130,6 +145,7 @@ class MissionResult:
     mover_xy: np.ndarray
     min_obstacle_distance: np.ndarray
     links: np.ndarray
+    unsafe_decisions: np.ndarray
 
     @property
     def guarantee_rate(self) -> float:
@@ -192,7 +208,26 @@ class SearchMission:
         a = (s.altitude - config.sensor.ground_z) * np.tan(config.sensor.opening_angle / 2)
         self.planner = SearchPlanner(s, PrismViewRegion(config.sensor, self.buildings), self.free_area,
                                      self.buildings, footprint_radius=np.sqrt(2) * a)
+        if config.safe_starts:
+            self._redraw_unsafe_starts(margin)
+        self.unsafe = np.zeros(config.n_uavs, dtype=bool)
         self.k = 0
+
+    def _redraw_unsafe_starts(self, margin: float, max_tries: int = 10000) -> None:
+        """Redraw each UAV start (position, heading) whose state is not safe (module docstring)."""
+        s = self.config.search
+        safety = LoiterSafety(speed=s.speed, dt=s.dt, max_turn=s.max_turn, required=s.d_col + s.clearance_margin,
+                              obstacles=self.obstacles)
+        if not safety.active:
+            return
+        for i in np.flatnonzero(~safety.is_safe(self.uav_xy, self.uav_heading)):
+            for _ in range(max_tries):
+                self.uav_xy[i] = random_free_points(self.rng, self.free_area, 1, margin=margin)[0]
+                self.uav_heading[i] = self.rng.uniform(-np.pi, np.pi)
+                if safety.is_safe(self.uav_xy[i], self.uav_heading[i])[0]:
+                    break
+            else:
+                raise ValueError(f"SearchMission: no safe start for UAV {i} in {max_tries} draws")
 
     def _controls(self, adjacency: np.ndarray) -> np.ndarray:
         cfg = self.config
@@ -207,6 +242,7 @@ class SearchMission:
             return np.where(outside, np.clip(err, -s.max_turn, s.max_turn), u)
         decisions = self.planner.plan_team(self.uav_xy, self.uav_heading, [e.estimate for e in self.estimators],
                                            adjacency)
+        self.unsafe = np.array([not d.safe for d in decisions])
         return np.array([d.u for d in decisions])
 
     def step(self, adjacency: np.ndarray) -> np.ndarray:
@@ -243,10 +279,13 @@ class SearchMission:
         uav_xy = [self.uav_xy.copy()]
         mover_xy = [self.movers.p_xy.copy()]
         d_obs = np.full((steps, n), np.inf)
+        unsafe = np.zeros((steps, n), dtype=bool)
         links_n = np.zeros(steps, dtype=int)
         links = line_of_sight_graph(self.uav_xy, self.obstacles)
         for k in range(steps):
+            before = self.uav_xy.copy()
             links = self.step(links)
+            unsafe[k] = self.unsafe
             links_n[k] = int(np.sum(np.triu(links, 1)))
             p = self.movers.p_xy
             for i, est in enumerate(self.estimators):
@@ -255,9 +294,9 @@ class SearchMission:
                 guarantee[k, i] = e.contains(p[is_target], cfg.estimator.containment_tol)
                 decoy_in_X[k] |= e.in_X(p[~is_target])
             if not self.obstacles.is_empty:
-                d_obs[k] = pg.distance_to(self.obstacles, self.uav_xy)
+                d_obs[k] = shapely.distance(self.obstacles, shapely.linestrings(np.stack([before, self.uav_xy], 1)))
             uav_xy.append(self.uav_xy.copy())
             mover_xy.append(p.copy())
         return MissionResult(area_X=aX, area_Xbar=aXb, guarantee=guarantee, decoy_in_X=decoy_in_X,
                              uav_xy=np.array(uav_xy), mover_xy=np.array(mover_xy), min_obstacle_distance=d_obs,
-                             links=links_n)
+                             links=links_n, unsafe_decisions=unsafe)

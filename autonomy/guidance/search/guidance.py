@@ -8,6 +8,10 @@ after this UAV). The agent passes only the line-of-sight neighbours as ``teammat
 
 The decision ``u`` becomes a world-frame velocity set-point along the new heading ``psi + u`` at the search speed,
 with altitude hold ``v_z = k_z (z_ref - z)``, and the yaw set-point ``psi + u`` (the footprint turns with the yaw).
+
+The planner's safe-loiter constraint (:mod:`~autonomy.guidance.search.safety`) is evaluated from the UAV's measured
+position and course; its by-construction clearance holds for the discrete model (straight chords of ``V T``, exact
+turns), so a physical UAV keeps it only up to its tracking error, which ``SearchConfig.clearance_margin`` must cover.
 """
 
 from __future__ import annotations

@@ -97,13 +97,23 @@ class NmpcConfig:
     solver : {"sqp", "ipopt", "rti"}
         "sqp": CasADi sqpmethod + qrqp (default: fastest, see :mod:`autonomy.guidance.nmpc`); "ipopt": interior point,
         warm-started; "rti": one SQP iteration per call (real-time iteration).
-    hessian : {"gauss_newton", "constraint_curvature"}
+    hessian : {"tiered", "gauss_newton", "constraint_curvature"}
         Hessian of the fast solver's QPs: "gauss_newton" σ J_Rᵀ J_R of the least-squares cost only;
         "constraint_curvature" adds the exact curvature Σ λ_j ∇²g_j of the dynamics and constraints, made positive
-        definite block by block by eigenvalue clipping (default; see :mod:`autonomy.guidance.nmpc` for the measured
-        effect).
+        definite block by block (``convexify``); "tiered" (default) runs the Gauss–Newton SQP with the cap
+        ``gauss_newton_max_iter`` and, when it does not converge, the constraint-curvature SQP from its iterate (see
+        :mod:`autonomy.guidance.nmpc` for the measured effect).
+    convexify : {"eigen-clip", "eigen-reflect", "regularize"}
+        How sqpmethod makes the constraint-curvature Hessian positive definite (CasADi ``convexify_strategy``):
+        clip or reflect the negative eigenvalues of each diagonal block of the Hessian (its strongly connected
+        components: 5 × 5 at most here), or add one multiple of the identity to the whole matrix (Gershgorin bound).
+    convexify_margin : float
+        Smallest eigenvalue (or diagonal margin) the convexification leaves, >= 0 (CasADi ``convexify_margin``).
     max_iter : int
-        Iteration cap of the solver (the deterministic time-out), >= 1.
+        Iteration cap of the solver (the deterministic time-out; of the constraint-curvature tier when tiered), >= 1.
+    gauss_newton_max_iter : int
+        Iteration cap of the Gauss–Newton tier of ``hessian="tiered"``, >= 1; a capped iterate is not used but handed
+        to the next tier.
     cold_start_max_iter : int
         Iteration cap of the exact-Hessian IPOPT used for cold starts (no previous plan), >= 1.
     robust_retry : bool
@@ -143,8 +153,11 @@ class NmpcConfig:
     min_altitude: float = 20.0
     max_altitude: float = 120.0
     solver: Literal["sqp", "ipopt", "rti"] = "sqp"
-    hessian: Literal["gauss_newton", "constraint_curvature"] = "constraint_curvature"
+    hessian: Literal["gauss_newton", "constraint_curvature", "tiered"] = "tiered"
+    convexify: Literal["eigen-clip", "eigen-reflect", "regularize"] = "eigen-clip"
+    convexify_margin: float = 1e-6
     max_iter: int = 15
+    gauss_newton_max_iter: int = 6
     cold_start_max_iter: int = 200
     robust_retry: bool = True
     time_budget_s: float = 0.02
@@ -158,13 +171,14 @@ class NmpcConfig:
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"NmpcConfig.{name} must be > 0, got {v}")
-        for name in ("min_speed", "building_margin", "building_vertical_clearance"):
+        for name in ("min_speed", "building_margin", "building_vertical_clearance", "convexify_margin"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"NmpcConfig.{name} must be >= 0, got {v}")
         if self.min_speed >= self.nominal_speed + self.speed_deviation:
             raise ValueError(f"NmpcConfig.min_speed must be < nominal_speed + speed_deviation, got {self.min_speed}")
         for name, lo in (("horizon", 2), ("substeps", 1), ("team_size", 1), ("max_buildings", 0), ("max_iter", 1),
+                         ("gauss_newton_max_iter", 1),
                          ("cold_start_max_iter", 1), ("fallback_max_shift", 0)):
             v = getattr(self, name)
             if int(v) != v or v < lo:
@@ -180,9 +194,12 @@ class NmpcConfig:
         if not (self.min_altitude <= self.max_altitude):
             raise ValueError(f"NmpcConfig.min_altitude must be <= max_altitude, "
                              f"got ({self.min_altitude}, {self.max_altitude})")
-        if self.hessian not in ("gauss_newton", "constraint_curvature"):
-            raise ValueError(f"NmpcConfig.hessian must be 'gauss_newton' or 'constraint_curvature', "
+        if self.hessian not in ("gauss_newton", "constraint_curvature", "tiered"):
+            raise ValueError(f"NmpcConfig.hessian must be 'gauss_newton', 'constraint_curvature' or 'tiered', "
                              f"got {self.hessian!r}")
+        if self.convexify not in ("eigen-clip", "eigen-reflect", "regularize"):
+            raise ValueError(f"NmpcConfig.convexify must be 'eigen-clip', 'eigen-reflect' or 'regularize', "
+                             f"got {self.convexify!r}")
         if self.solver not in ("sqp", "ipopt", "rti"):
             raise ValueError(f"NmpcConfig.solver must be 'sqp', 'ipopt' or 'rti', got {self.solver!r}")
 

@@ -130,7 +130,7 @@ class _Broken:
 def test_failed_fast_solve_is_retried_with_the_robust_solver(retry):
     g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, robust_retry=retry), 0)
     g.command(*_states(0.0), 0.0)  # cold start (IPOPT) gives a plan to warm-start from
-    g._solver = _Broken()
+    g._solver = g._curv_solver = _Broken()  # both SQP tiers
     sp = g.command(*_states(0.5), 0.5)
     assert g.stats.retries == (1 if retry else 0)
     assert g.stats.failures == (0 if retry else 1) and g.stats.fallbacks_shifted == (0 if retry else 1)
@@ -140,8 +140,8 @@ def test_failed_fast_solve_is_retried_with_the_robust_solver(retry):
         assert g._plan_t == 0.5
 
 
-@pytest.mark.parametrize("hessian", ["gauss_newton", "constraint_curvature"])
-def test_both_hessians_hold_standoff_and_phase(hessian):
+@pytest.mark.parametrize("hessian", ["gauss_newton", "constraint_curvature", "tiered"])
+def test_each_hessian_holds_standoff_and_phase(hessian):
     cfg = NmpcConfig(standoff_radius=RD, hessian=hessian)
     laws = [NmpcStandoffGuidance(cfg, 0), NmpcStandoffGuidance(cfg, 1)]
     x0 = np.array([[150.0, 20.0, 1.5, 12.0, 0.0], [-100.0, -90.0, 0.0, 12.0, 0.0]])
@@ -155,7 +155,9 @@ def test_both_hessians_hold_standoff_and_phase(hessian):
 
 def test_unused_constraint_slots_never_bind():
     """Rows of absent teammates and buildings are 1 + s >= 0, not copies of the slack bound s >= 0."""
-    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, max_buildings=3), 0, buildings=())
+    far = [Building.cuboid((5000.0, 5000.0), (20, 20, 90)), Building.cuboid((-5000.0, 0.0), (20, 20, 90))]
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, max_buildings=3), 0, buildings=far)
+    assert g._n_bld == 2
     own, tgt, _ = _states(0.0)
     x0 = g._initial_state(own, 0.0)
     par = g._parameters(x0, own, tgt, [], 0.0)  # no teammate, no building
@@ -180,3 +182,40 @@ def test_warm_start_is_dynamically_consistent_and_shifts_multipliers():
     rows = g._lam_g0.reshape(n, -1)
     np.testing.assert_allclose(lam_g.reshape(n, -1)[: n - 2], rows[2:])
     np.testing.assert_allclose(lam_x[5 * n: 7 * n].reshape(n, 2)[: n - 2], g._lam_x0[5 * n: 7 * n].reshape(n, 2)[2:])
+
+
+def test_building_slots_only_for_buildings_that_can_be_constrained():
+    low = [Building.cuboid((60.0, 110.0), (50, 30, 40))]  # flown over at 60 m (top below 60 − 5 m)
+    tall = low + [Building.cuboid((150.0, -100.0), (40, 40, 90))]
+    assert NmpcStandoffGuidance(NmpcConfig(max_buildings=4), 0, buildings=low)._n_bld == 0
+    assert NmpcStandoffGuidance(NmpcConfig(max_buildings=4), 0, buildings=tall)._n_bld == 1
+    assert NmpcStandoffGuidance(NmpcConfig(max_buildings=0), 0, buildings=tall)._n_bld == 0
+
+
+class _Capped:
+    """The Gauss-Newton tier stopped by its iteration cap: runs the real solver, reports the cap."""
+
+    def __init__(self, inner):
+        self.inner, self.calls = inner, 0
+
+    def __call__(self, **kwargs):
+        self.calls += 1
+        return self.inner(**kwargs)
+
+    def stats(self):
+        return {**self.inner.stats(), "success": False, "return_status": "Maximum_Iterations_Exceeded"}
+
+
+def test_tiered_escalates_a_capped_gauss_newton_solve_to_the_curvature_tier():
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, hessian="tiered", gauss_newton_max_iter=1), 0)
+    g.command(*_states(0.0), 0.0)  # cold start (IPOPT)
+    g.command(*_states(0.5), 0.5)  # warm: Gauss-Newton tier, one iteration, from a good guess
+    esc = g.stats.escalations
+    g._solver = _Capped(g._solver)
+    sp = g.command(*_states(1.0), 1.0)
+    assert g._solver.calls == 1 and g.stats.escalations == esc + 1
+    assert g.stats.retries == 0 and g.stats.failures == 0 and g._plan_t == 1.0
+    np.testing.assert_allclose([sp.speed, sp.heading_rate], g._plan_u[0])
+    assert g.stats.summary()["escalations"] == g.stats.escalations
+    g2 = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, hessian="gauss_newton"), 0)
+    assert g2._curv_solver is None  # a single tier: nothing to escalate to

@@ -3,7 +3,7 @@
 ``metrics.json`` holds ``sim_time_s``, ``wall_time_s``, ``real_time_factor``, ``seed``, event counts, and
 
 - ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
-  failures / fallbacks and solve time p50 / p95 (ms), standoff error (m) and, with several trackers, phase error (deg);
+  failures / fallbacks / retries (and escalations, for tiered solvers) and solve time p50 / p95 (ms), standoff error (m) and, with several trackers, phase error (deg);
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses).
@@ -119,6 +119,8 @@ class MetricsTracker:
                          solver_fallbacks=s.get("fallbacks_shifted", 0) + s.get("fallbacks_vector_field", 0),
                          solver_retries=s.get("retries", 0),
                          solve_ms_p50=s.get("solve_ms_p50"), solve_ms_p95=s.get("solve_ms_p95"))
+                if "escalations" in s:  # tiered solvers: hand-offs from the fast tier to the robust one
+                    m["solver_escalations"] = s["escalations"]
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
             uavs[uid] = m

@@ -16,3 +16,7 @@ def test_shipped_world_runs(tmp_path, name):
     truth = res.stream("uav_truth")
     assert set(truth["uav"].tolist()) == set(range(len(world.uavs)))
     assert (abs(truth["z"]) < 1e4).all()
+    for i, u in enumerate(world.uavs):  # the solver health of MPC guidance reaches the metrics
+        m = res.metrics["uavs"][u.id]
+        if u.autonomy.guidance.type == "nmpc":
+            assert {"solver_calls", "solver_failures", "solver_retries", "solver_escalations"} <= set(m), (i, m)

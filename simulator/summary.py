@@ -3,7 +3,8 @@
 ``metrics.json`` holds ``sim_time_s``, ``wall_time_s``, ``real_time_factor``, ``seed``, event counts, and
 
 - ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
-  failures / fallbacks / retries (and escalations, for tiered solvers) and solve time p50 / p95 (ms), standoff error (m) and, with several trackers, phase error (deg);
+  failures / fallbacks / retries (and escalations, for tiered solvers) and solve time p50 / p95 (ms), standoff error
+  (m) and, with several trackers, phase error (deg);
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses).

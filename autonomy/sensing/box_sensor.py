@@ -97,16 +97,28 @@ def _project_ring(ring_xy: np.ndarray, z: float, s: np.ndarray, ground_z: float,
     return s[:2] + (np.linalg.norm(d, axis=1, keepdims=True) + far) * d / n
 
 
+def _is_convex(ring_xy: np.ndarray) -> bool:
+    """Whether the closed ring (n, 2) (not repeating its first vertex) turns the same way at every vertex."""
+    d = np.roll(ring_xy, -1, axis=0) - ring_xy
+    turn = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
+    return bool(np.all(turn >= 0) or np.all(turn <= 0))
+
+
 def building_shadow(building: Building, s_W: np.ndarray, ground_z: float, far: float) -> BaseGeometry:
     """Ground region hidden from a point sensor at ``s_W`` by a prism building.
 
     Union of the central projections of the footprint rings at ``base_z`` and ``top_z`` and of every side face;
     a ring at or above the sensor is pushed ``far`` metres beyond its vertices (an unbounded shadow truncated).
-    The building's own footprint is included.
+    The building's own footprint is included. For a convex footprint the prism is convex, so is its shadow, and the
+    union is the convex hull of the footprint and the two projected rings: computed as such, because GEOS's union of
+    the sliver side faces a nearly edge-on wall projects to can come out wrong (a union smaller than one of its parts
+    was seen with GEOS 3.14).
     """
     fp = np.asarray(building.footprint)
     base = _project_ring(fp, max(building.base_z, ground_z), s_W, ground_z, far)
     top = _project_ring(fp, building.top_z, s_W, ground_z, far)
+    if _is_convex(fp):
+        return shapely.MultiPoint(np.vstack([fp, base, top])).convex_hull
     parts = [shapely.Polygon(fp), shapely.Polygon(base)]
     if building.top_z < s_W[2] - 1e-9:
         parts.append(shapely.Polygon(top))

@@ -197,7 +197,7 @@ opening, 82.8 m footprint at 100 m, ±5 m bounded error) with obstacle shadows; 
 {cfg.n_decoys} decoys at 5 km/h with random heading changes in [−π/5, π/5]; {cfg.n_obstacles} cuboid obstacles
 30–70 m wide and 100 m tall in a {cfg.area_size[0]:g} m × {cfg.area_size[1]:g} m area; set-membership estimators on
 polygon unions with outer dilation, correction, and fusion over line-of-sight links; sequential one-step search MPC
-with the paper's weights (α_m 1.3, α_d 4.5, α_s 3500), with and without a safe-loiter admissibility constraint
+with the paper's weights (α_m 1.3, α_d 4.5, α_s 3500) and a safe-loiter admissibility constraint
 (beyond the paper: a turn is admissible only if from the state it leads to, the full-left or full-right
 ±{np.degrees(s_cfg.max_turn):.0f}° loiter stays {s_cfg.d_col:g} + {s_cfg.clearance_margin:g} m clear of every
 obstacle; UAV starts drawn until safe, also in the baseline). Baseline: random turns with the same estimators.

@@ -208,3 +208,24 @@ def test_true_targets_always_inside_X_or_Xbar(seed, n_obstacles, n_uavs, control
         assert shapely.difference(e.support, mission.free_area.buffer(1e-6)).area < 1e-6
     # the test is not vacuous: the sensors cleared part of the area
     assert res.area_Xbar.min() < 0.95
+
+
+def test_dilate_recomputes_an_invalid_buffer_with_more_segments(monkeypatch):
+    """A self-intersecting buffer from GEOS is not passed on: the next quad_segs is tried, still an outer bound."""
+    real = shapely.buffer
+    calls = []
+
+    def flaky(geom, distance, quad_segs=8, **kw):
+        calls.append(quad_segs)
+        if len(calls) == 1:  # a bow-tie, as GEOS once returned
+            return shapely.Polygon([(0, 0), (1, 1), (1, 0), (0, 1)])
+        return real(geom, distance, quad_segs=quad_segs, **kw)
+
+    monkeypatch.setattr(pg.shapely, "buffer", flaky)
+    sq = shapely.box(0, 0, 10, 10)
+    D = pg.dilate(sq, 2.0, 2)
+    assert calls == [2, 3] and D.is_valid
+    a = np.linspace(0.0, np.pi / 2, 50)
+    corner = np.column_stack([10 + 1.999 * np.cos(a), 10 + 1.999 * np.sin(a)])  # inside the exact dilation
+    assert D.contains(shapely.box(-2, 0, 12, 10)) and D.contains(shapely.box(0, -2, 10, 12))
+    assert np.all(pg.contains_points(D, corner, tol=0.0))

@@ -67,14 +67,26 @@ def n_vertices(geom: BaseGeometry) -> int:
     return int(shapely.get_num_coordinates(geom))
 
 
+_MAX_QUAD_SEGS = 8
+
+
 def dilate(geom: BaseGeometry, radius: float, quad_segs: int = 2) -> BaseGeometry:
-    """Outer approximation of ``geom (+) B(radius)`` (module docstring), ``radius`` in m, >= 0."""
+    """Outer approximation of ``geom (+) B(radius)`` (module docstring), ``radius`` in m, >= 0.
+
+    GEOS can return a self-intersecting buffer (seen on a multi-part set grown by 1.39 m, whose next intersection then
+    raised a TopologyException): such a result is recomputed with more segments per quarter circle (each still an
+    outer bound, the radius being scaled for its own ``quad_segs``), and as a last resort repaired with
+    ``make_valid``, which keeps every point it covered.
+    """
     if radius < 0:
         raise ValueError(f"dilate radius must be >= 0 m, got {radius}")
     if geom.is_empty or radius == 0:
         return geom
-    r_out = radius / np.cos(np.pi / (4 * quad_segs))
-    return as_polygonal(shapely.buffer(geom, r_out, quad_segs=quad_segs))
+    for segs in range(quad_segs, max(quad_segs, _MAX_QUAD_SEGS) + 1):
+        out = shapely.buffer(geom, radius / np.cos(np.pi / (4 * segs)), quad_segs=segs)
+        if out.is_valid:
+            return as_polygonal(out)
+    return as_polygonal(shapely.make_valid(out))
 
 
 def fill_small_holes(geom: BaseGeometry, max_hole_area: float) -> BaseGeometry:

@@ -129,6 +129,10 @@ class NmpcConfig:
         Oldest previous plan (in steps) the shifted-plan fallback may use, >= 0.
     fallback : VectorFieldConfig | None
         Vector-field fallback; ``None`` derives one from this configuration.
+    compiled : bool
+        Compile the fast solver's functions to C (cached on disk, :mod:`autonomy.guidance.codegen`); the solutions
+        are the same as uncompiled, each solve ≈ 20 % faster. The first construction of a problem on a machine
+        pays the compiler (a few seconds). Without a C compiler the solver runs uncompiled.
     """
 
     standoff_radius: float = 120.0
@@ -164,6 +168,7 @@ class NmpcConfig:
     enforce_time_budget: bool = False
     fallback_max_shift: int = 10
     fallback: VectorFieldConfig | None = None
+    compiled: bool = True
 
     def __post_init__(self) -> None:
         for name in ("standoff_radius", "nominal_speed", "speed_deviation", "max_heading_rate", "dt",

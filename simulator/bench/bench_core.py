@@ -95,3 +95,37 @@ def bench_world_rtf() -> list[BenchRecord]:
             BenchRecord(name="helsinki_chase_rtf",
                         value=median_of(lambda: _world_rtf("helsinki_chase", 20.0, _radar_only("helsinki_chase")), 3),
                         unit="x", target=10.0, better="higher")]
+
+
+_CAMPAIGN_RUNS = 4
+
+
+@benchmark("campaign_road_standoff", produces=("road_standoff_campaign_100_runs_min", "campaign_run_overhead_ratio"))
+def bench_campaign() -> list[BenchRecord]:
+    """Wall time of a 100-run ``road_standoff`` campaign on this machine's cores, extrapolated from a campaign of
+    ``_CAMPAIGN_RUNS`` full-length runs (120 s simulated each) on the local process pool: 100 / runs × its wall time
+    (the runs are independent, so the campaign scales by run count once the pool is full). Measuring all 100 takes
+    ≈ 20–40 min here: run ``skytrack campaign road_standoff --runs 100`` for the real figure.
+
+    ``campaign_run_overhead_ratio`` is the campaign's wall time over the sum of its runs' own wall times divided by
+    the workers: ≈ 1 when the pool keeps both cores busy (process start-up, imports and journaling are small).
+    """
+    import os
+
+    from simulator.campaign.config import CampaignConfig
+    from simulator.campaign.runner import run_campaign
+
+    workers = os.cpu_count() or 1
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        res = run_campaign(CampaignConfig(world="road_standoff", runs=_CAMPAIGN_RUNS, out_dir=Path(tmp),
+                                          workers=workers))
+        wall = time.perf_counter() - t0
+    failed = [r for r in res.reports if r.status != "completed"]
+    if failed:
+        raise RuntimeError(f"{len(failed)} campaign runs did not complete: {failed[0].error}")
+    run_walls = [r.wall_time_s for r in res.reports]
+    ideal = sum(run_walls) / min(workers, _CAMPAIGN_RUNS)
+    return [BenchRecord(name="road_standoff_campaign_100_runs_min", value=wall * 100 / _CAMPAIGN_RUNS / 60,
+                        unit="min", better="lower"),
+            BenchRecord(name="campaign_run_overhead_ratio", value=wall / ideal, unit="x", better="lower")]

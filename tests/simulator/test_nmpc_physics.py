@@ -57,3 +57,48 @@ def test_quadrotors_hold_standoff_and_phase_on_a_constant_velocity_car(tmp_path)
     for uav in ("uav1", "uav2"):  # the NMPC flew it: no failed solve fell back to a shifted plan or the vector field
         m = res.metrics["uavs"][uav]
         assert m["solver_calls"] > 250 and m["solver_failures"] == 0 and m["solver_fallbacks"] == 0
+
+
+_BUILDINGS = [{"center": [60, 95], "size": [40, 30, 90]}, {"center": [140, -100], "size": [50, 30, 95]},
+              {"center": [230, 100], "size": [40, 40, 85]}, {"center": [0, -110], "size": [30, 30, 80]}]
+
+
+@pytest.mark.slow
+def test_quadrotors_keep_out_of_buildings_and_apart_in_a_town(tmp_path):
+    """Three NMPC quadrotors orbit the car past towers taller than their altitude that stand on the orbit: no UAV
+    enters a footprint or touches a building, and they keep their separation."""
+    world = {**_WORLD, "name": "nmpc_town", "buildings": _BUILDINGS,
+             "sim": {**_WORLD["sim"], "duration_s": 60}}
+    sep = 25.0
+    world["uavs"] = [
+        {**_WORLD["uavs"][0], "id": f"uav{i + 1}", "initial": {"position": pos, "yaw_deg": 0},
+         "autonomy": {**_WORLD["uavs"][0]["autonomy"],
+                      "guidance": {"type": "nmpc", "standoff_m": RD, "speed": 10, "altitude": 60,
+                                   "params": {"separation_distance": sep}}}}
+        for i, pos in enumerate([[-100, -90, 60], [-40, 90, 60], [-190, 40, 60]])
+    ]
+    path = tmp_path / "world.yaml"
+    path.write_text(yaml.safe_dump(world))
+    res = run(path, out_dir=tmp_path / "run")
+    assert res.status == "completed", res.error
+    u = [res.stream("uav_truth", uav=i) for i in range(3)]
+    for ui in u:
+        for b in _BUILDINGS:  # axis-aligned footprints, towers above the 60 m flight level
+            (cx, cy), (lx, ly, _) = b["center"], b["size"]
+            inside = (np.abs(ui["x"] - cx) < lx / 2) & (np.abs(ui["y"] - cy) < ly / 2)
+            assert not inside.any(), f"a UAV entered the footprint of the building at {b['center']}"
+    xy = np.stack([np.stack([ui["x"], ui["y"]], axis=-1) for ui in u], axis=1)
+    d = [np.hypot(*(xy[:, i] - xy[:, j]).T) for i in range(3) for j in range(i + 1, 3)]
+    assert min(float(np.min(x)) for x in d) >= 0.9 * sep
+    for uav in ("uav1", "uav2", "uav3"):
+        m = res.metrics["uavs"][uav]
+        assert m["collisions"] == 0 and m["solver_fallbacks"] == 0
+    # the towers were in the way: without keep-out the orbit of radius RD around the car passes through them
+    target = res.target_truth_at(u[0]["t"])
+    ang = np.linspace(0, 2 * np.pi, 72, endpoint=False)
+    ring = target[:, None, :] + RD * np.stack([np.cos(ang), np.sin(ang)], axis=-1)[None]
+    blocked = np.zeros(ring.shape[:2], dtype=bool)
+    for b in _BUILDINGS:
+        (cx, cy), (lx, ly, _) = b["center"], b["size"]
+        blocked |= (np.abs(ring[..., 0] - cx) < lx / 2) & (np.abs(ring[..., 1] - cy) < ly / 2)
+    assert blocked.any(axis=1).mean() > 0.5

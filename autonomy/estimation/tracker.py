@@ -12,6 +12,13 @@ point on the target plane) and kept as a tentative fix; a fix of a later scan th
 the
 velocity of the pair. A lone false alarm therefore never starts a track, and clutter pairs are rare when false alarms
 are spread over the radar's whole field of regard.
+
+In a consensus team (HCMCI, :mod:`autonomy.fusion.hcmci_team`) :meth:`SingleTargetTracker.step_information` replaces
+:meth:`~SingleTargetTracker.step`: the same initiation, gating and association, but the gated update of the last scan,
+when that scan was taken at the step time, is returned as the scan's information contribution together with the
+track's prior at that time instead of being applied; the team's consensus result then goes back through
+:meth:`~SingleTargetTracker.set_information`. Scans older than the step time are applied locally (prediction to a
+common time before contributing is exact only for a scan taken at that time).
 """
 
 from __future__ import annotations
@@ -22,12 +29,33 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import gammaincinv
 
+from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.factory import make_filter
 from autonomy.estimation.measurements import measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
+from autonomy.estimation.scif import SqrtInformation
 from autonomy.guidance.types import TargetEstimate
 
-__all__ = ["SingleTargetTracker", "TrackerConfig", "make_motion_model"]
+__all__ = ["SingleTargetTracker", "TrackInformation", "TrackerConfig", "make_motion_model"]
+
+
+@dataclass(frozen=True)
+class TrackInformation:
+    """A track's share of one consensus step at time ``t`` (s).
+
+    Attributes
+    ----------
+    t : float
+        Step time, s; both quantities hold at it.
+    prior : SqrtInformation
+        The track predicted to ``t`` (after any older scans were applied locally): ``(S_h⁻, ĥ⁻)``.
+    contribution : SqrtInformation | None
+        Information ``(S_I, i)`` of the gated detection of the scan taken at ``t``; None if there was none.
+    """
+
+    t: float
+    prior: SqrtInformation
+    contribution: SqrtInformation | None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -239,10 +267,44 @@ class SingleTargetTracker:
     def step(self, t: float, detections: Sequence[object]) -> TargetEstimate | None:
         """Absorb ``detections`` (sorted by ``t_meas``) and return the estimate at ``t`` (s), or None without a
         track."""
+        self._absorb(detections, defer_at=None)
+        return self.estimate(t)
+
+    def step_information(self, t: float, detections: Sequence[object]) -> TrackInformation | None:
+        """Like :meth:`step`, but the gated detection of the last scan, if that scan was taken at ``t`` (s), is not
+        applied: it is returned as its information contribution beside the track's prior at ``t``.
+
+        Apply the fused result with :meth:`set_information`, then read it with :meth:`estimate`. Needs an
+        information filter (``scif``). Returns None without a track (also when the track was dropped as lost).
+        """
+        if self.config.filter != "scif":
+            raise TypeError(f"step_information needs the information filter (scif), not {self.config.filter!r}")
+        contribution = self._absorb(detections, defer_at=t)
+        if self.filter is None:
+            return None
+        if t - self.last_update_t > self.config.lost_after_s:
+            self.filter = None
+            return None
+        if contribution is None and t > self.filter.t:
+            self.filter.predict(t)
+        return TrackInformation(t=float(t), prior=self.filter.information_state, contribution=contribution)
+
+    def set_information(self, info: SqrtInformation) -> None:
+        """Replace the track's estimate by ``info`` (e.g. the consensus posterior at the time of the last
+        :meth:`step_information`)."""
+        if self.filter is None:
+            raise ValueError("set_information needs a track")
+        self.filter.set_information(info)
+
+    def _absorb(self, detections: Sequence[object], defer_at: float | None) -> SqrtInformation | None:
+        """Initiate, gate and update from ``detections``; with ``defer_at`` (s), the gated detection of the last scan,
+        if taken at ``defer_at``, gives its information contribution (returned) instead of an update."""
         scans: dict[tuple[float, str], list] = {}
         for d in detections:
             scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
-        for (t_meas, _), dets in sorted(scans.items(), key=lambda kv: kv[0][0]):
+        ordered = sorted(scans.items(), key=lambda kv: kv[0][0])
+        contribution = None
+        for k, ((t_meas, _), dets) in enumerate(ordered):
             if self.filter is not None and t_meas - self.last_update_t > self.config.lost_after_s:
                 self.filter = None
             if self.filter is None:
@@ -267,11 +329,18 @@ class SingleTargetTracker:
                     self._tentative = []
                     self._initiate(dets)
                 continue
-            self.filter.update(best)
+            if defer_at is not None and k == len(ordered) - 1 and abs(t_meas - defer_at) <= TIME_TOLERANCE:
+                contribution = self.filter.information(best)[0]
+            else:
+                self.filter.update(best)
             if _fixes_position(best):
                 self._missed = 0
             self.updates += 1
             self.last_update_t = t_meas
+        return contribution
+
+    def estimate(self, t: float) -> TargetEstimate | None:
+        """The track's estimate predicted to ``t`` (s), or None without a track (dropping it if lost by ``t``)."""
         if self.filter is None:
             return None
         if t - self.last_update_t > self.config.lost_after_s:

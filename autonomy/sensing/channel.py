@@ -6,8 +6,8 @@ Link model (Rayleigh fast fading, Liu, Fu & Gao 2018): a packet over a link of l
 
 with transmit power ``P`` and noise power ``N`` in mW (from dBm). The defaults (``P`` = 30 dBm, ``N`` = -70 dBm,
 ``gamma`` = 10, ``C`` = 1, ``alpha`` = 3, the paper's Table 1) give ``Pr(d) = exp(-(d / 1000 m)**3)``. On top,
-``Pr = 0`` beyond ``max_range``, across a building (``SceneQuery.line_of_sight``) when ``block_by_buildings``, and
-during a scheduled :class:`LinkOutage`.
+``Pr = 0`` beyond ``max_range``, across a building (``SceneQuery.line_of_sight``) when ``block_by_buildings``,
+between nodes that are not a pair of a fixed topology ``links``, and during a scheduled :class:`LinkOutage`.
 
 Routing: the minimum spanning tree over the nodes with edge weights ``-ln Pr`` (the most reliable tree), rooted
 at the base; a node's route is its tree path and its route probability ``beta`` the product of the hop
@@ -78,6 +78,8 @@ class ChannelConfig:
         Delay per hop (s); must be a whole number of physics ticks.
     outages : tuple[LinkOutage, ...]
         Scheduled link outages.
+    links : tuple[tuple[str, str], ...] | None
+        Fixed topology: only these (undirected) node pairs have a link; ``None`` for every pair.
     """
 
     transmit_power_dbm: float = 30.0
@@ -89,6 +91,7 @@ class ChannelConfig:
     block_by_buildings: bool = True
     latency_s: float = 0.0
     outages: tuple[LinkOutage, ...] = field(default_factory=tuple)
+    links: tuple[tuple[str, str], ...] | None = None
 
     def __post_init__(self) -> None:
         for name in ("gamma", "c", "alpha"):
@@ -99,6 +102,12 @@ class ChannelConfig:
         if not (self.latency_s >= 0):
             raise ValueError(f"ChannelConfig.latency_s must be >= 0 s, got {self.latency_s}")
         object.__setattr__(self, "outages", tuple(self.outages))
+        if self.links is not None:
+            links = tuple((str(a), str(b)) for a, b in self.links)
+            for a, b in links:
+                if a == b:
+                    raise ValueError(f"ChannelConfig.links: a link needs two different nodes, got {a!r} twice")
+            object.__setattr__(self, "links", links)
 
     @property
     def fading_scale(self) -> float:
@@ -251,6 +260,7 @@ class Channel:
             )
             for o in config.outages
         ]
+        self._pairs = None if config.links is None else {frozenset(p) for p in config.links}
         self._queue: list[Envelope] = []
         self._counts: dict[tuple[str, str], list[int]] = {}
 
@@ -271,10 +281,21 @@ class Channel:
             P[iu[~clear], ju[~clear]] = 0.0
             P[ju[~clear], iu[~clear]] = 0.0
         for i, j in zip(iu, ju, strict=True):
-            if self.link_down(nodes[i], nodes[j], tick):
+            unlinked = self._pairs is not None and frozenset((nodes[i], nodes[j])) not in self._pairs
+            if unlinked or self.link_down(nodes[i], nodes[j], tick):
                 P[i, j] = P[j, i] = 0.0
         np.fill_diagonal(P, 1.0)
         return P
+
+    def sample_links(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
+        """(N, N) symmetric bool: which links between ``nodes`` are up at ``tick``, one erasure draw per link with its
+        delivery probability (diagonal False). For an exchange over the link state of one instant, e.g. a consensus
+        step whose rounds all use the same links."""
+        P = self.link_matrix(nodes, positions, tick)
+        iu, ju = np.triu_indices(len(P), k=1)
+        up = np.zeros(P.shape, dtype=bool)
+        up[iu, ju] = self.rng.uniform(size=iu.size) < P[iu, ju]
+        return up | up.T
 
     def routing_tree(
         self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], root: str, tick: int

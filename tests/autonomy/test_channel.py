@@ -138,3 +138,24 @@ def test_config_validation_names_field():
         LinkOutage(node_a="a", node_b="b", start_s=2.0, end_s=1.0)
     with pytest.raises(ValueError, match="scene"):
         Channel(ChannelConfig(), 240.0, np.random.default_rng(0))
+
+
+def test_fixed_topology_cuts_unlisted_pairs_and_sampled_links_follow_the_probabilities():
+    ring = (("a", "c"), ("c", "b"), ("b", "d"), ("d", "a"))
+    cfg = ChannelConfig(block_by_buildings=False, links=ring,
+                        outages=(LinkOutage(node_a="a", node_b="c", start_s=1.0, end_s=2.0),))
+    ch = Channel(cfg, TICK_HZ, np.random.default_rng(7))
+    nodes = ("a", "b", "c", "d")
+    pos = {n: np.array([100.0 * k, 0.0, 50.0]) for k, n in enumerate(nodes)}
+    P = ch.link_matrix(nodes, pos, 0)
+    assert P[0, 1] == 0.0 and P[2, 3] == 0.0 and P[0, 2] > 0.99  # a-b and c-d are not links
+    assert not ch.send(msg("a", "b"), pos, 0)["b"]
+    n = 2000
+    up = np.array([ch.sample_links(nodes, pos, tick) for tick in range(n)])
+    assert (up == up.transpose(0, 2, 1)).all() and not up[:, [0, 1, 2, 3], [0, 1, 2, 3]].any()
+    assert not up[:, 0, 1].any() and not up[:, 2, 3].any()
+    lo, hi = stats.binom.interval(0.99, n, P[0, 3])
+    assert lo <= up[:, 0, 3].sum() <= hi
+    assert not ch.sample_links(nodes, pos, int(1.5 * TICK_HZ))[0, 2]  # the outage holds a-c down
+    with pytest.raises(ValueError, match="links"):
+        ChannelConfig(links=(("a", "a"),))

@@ -100,11 +100,23 @@ class Agent:
     def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState],
              shared: Sequence[TargetEstimate] = ()) -> AgentOutput:
         """Run estimation, fusion with the teammates' ``shared`` estimates, and guidance at time ``t`` (s)."""
+        ready = self.take_ready(t)
+        return self.act(t, own, teammates, self.estimator.step(t, ready), len(ready), shared)
+
+    def take_ready(self, t: float) -> list[Detection]:
+        """Detections that have arrived by ``t`` (s), in the order they were taken; they leave the queue.
+
+        For a step whose estimation runs outside the agent (a consensus team): pass the estimate to :meth:`act`.
+        """
         ready = sorted((d for d in self._pending if d.t_arrival <= t + 1e-9), key=lambda d: d.t_meas)
         self._pending = [d for d in self._pending if d.t_arrival > t + 1e-9]
-        local = self.estimator.step(t, ready)
+        return ready
+
+    def act(self, t: float, own: OwnState, teammates: Sequence[TeammateState], local: TargetEstimate | None,
+            used_detections: int, shared: Sequence[TargetEstimate] = ()) -> AgentOutput:
+        """Fusion (if any) of ``local`` with ``shared`` and guidance at ``t`` (s), on an estimate already made."""
         self.estimate = self.fusion.fuse(t, local, shared) if self.fusion is not None else local
         law = self.idle if self.estimate is None and self.idle is not None else self.guidance
         setpoint = law.command(own, self.estimate, teammates, t)
         return AgentOutput(setpoint=setpoint, estimate=self.estimate, local_estimate=local,
-                           used_detections=len(ready))
+                           used_detections=used_detections)

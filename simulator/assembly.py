@@ -10,6 +10,8 @@ import numpy as np
 import pybullet as p
 
 from autonomy.agent import Agent
+from autonomy.estimation.tracker import SingleTargetTracker
+from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam, pair_adjacency
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
@@ -45,6 +47,7 @@ class AgentSlot:
     uav: int
     agent: Agent
     divisor: int
+    hcmci: bool = False  # estimates as a member of the HCMCI consensus team
 
 
 @dataclass
@@ -78,6 +81,10 @@ class Assembly:
     _sharing: bool = False
     event_counts_by_uav: dict = field(default_factory=dict)
     _contacts: set = field(default_factory=set)
+    hcmci: HcmciTeam | None = None
+    consensus_steps: dict[int, int] = field(default_factory=dict)
+    consensus_links: list[int] = field(default_factory=list)
+    _links: set | None = None  # comms.links as frozensets of UAV indices (None: every pair)
 
     # -- truth ---------------------------------------------------------------------------------------------------
     def target_truth(self) -> TargetTruth:
@@ -135,6 +142,32 @@ class Assembly:
                            plan_dt=float(getattr(getattr(self.agents[i].agent.guidance, "config", None), "dt", 1.0)))
         self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
 
+    def links_up(self, uavs: list[int], tick: int) -> np.ndarray:
+        """(n, n) bool: which links between ``uavs`` (indices) are up at ``tick``. Radio: one erasure draw per link
+        (fixed topology, range, blockage and outages included); perfect comms: the pairs of ``comms.links`` (every
+        pair without it) less the scheduled outages."""
+        ids = [self.uav_ids[j] for j in uavs]
+        if self.channel is not None:
+            st = self.quads.state
+            return self.channel.sample_links(ids, {u: st.p_W[j] for u, j in zip(ids, uavs, strict=True)}, tick)
+        down = {frozenset((a, b)) for a, b, start, end in self._outage_ticks if start <= tick < end}
+        pairs = [(k, m) for k in range(len(uavs)) for m in range(k + 1, len(uavs))
+                 if (self._links is None or frozenset((uavs[k], uavs[m])) in self._links)
+                 and frozenset((ids[k], ids[m])) not in down]
+        return pair_adjacency(len(uavs), pairs)
+
+    def _team_step(self, t: float, tick: int, slots: list[AgentSlot]) -> dict[int, tuple[Any, int]]:
+        """Estimation of the HCMCI agents due at ``tick``, as one team: each UAV's (estimate, detections used)."""
+        if not slots:
+            return {}
+        uavs = [a.uav for a in slots]
+        ready = [a.agent.take_ready(t) for a in slots]
+        estimates, fused = self.hcmci.step(t, [a.agent.estimator for a in slots], ready, self.links_up(uavs, tick))
+        for j, post in zip(uavs, fused.posteriors, strict=True):
+            self.consensus_steps[j] = self.consensus_steps.get(j, 0) + (post is not None)
+        self.consensus_links.append(fused.active_links)
+        return {j: (est, len(r)) for j, est, r in zip(uavs, estimates, ready, strict=True)}
+
     def _outage_events(self, tick: int, t: float) -> None:
         for a, b, start, end in self._outage_ticks:
             if tick == max(start, 1):
@@ -162,13 +195,17 @@ class Assembly:
                 for a in self.agents:
                     if a.uav == slot.uav:
                         a.agent.receive(out.detections)
-        for a in self.agents:                  # 5. agents
-            if tick % a.divisor:
-                continue
+        agents = [a for a in self.agents if tick % a.divisor == 0]
+        team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
+        for a in agents:                                                  # then every agent fuses and plans
             if self.channel is not None:
                 self._broadcast_state(a.uav, t, tick)
             mates, shared = self.inbox(a.uav, t, tick)
-            result = a.agent.step(t, self.own_state(a.uav, t), mates, shared if a.agent.fusion is not None else ())
+            own = self.own_state(a.uav, t)
+            if a.uav in team:
+                result = a.agent.act(t, own, mates, *team[a.uav])
+            else:
+                result = a.agent.step(t, own, mates, shared if a.agent.fusion is not None else ())
             self.quads.set_command(a.uav, _to_command(result.setpoint))
             if self._sharing:
                 self._share_estimate(a.uav, result.local_estimate, t, tick)
@@ -300,6 +337,7 @@ class Prepared:
     geometry: Any
     sensors: list[SensorSlot]
     agents: list[AgentSlot]
+    hcmci: HcmciTeam | None = None
 
 
 def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) -> Prepared:
@@ -316,7 +354,7 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
             issues.append(WorldIssue(f"uavs[{i}].airframe", u.airframe, f"a known airframe ({exc})"))
     if issues:
         raise WorldError(str(loaded.path), issues)
-    sensors, agents = [], []
+    sensors, agents, team = [], [], None
     for i, u in enumerate(world.uavs):
         for j, spec in enumerate(u.sensors):
             name = spec.id or f"{u.id}/{spec.type}{j}"
@@ -334,13 +372,25 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
                                 lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
-        fusion = None
-        if u.autonomy.fusion.method != "none":
-            f = u.autonomy.fusion
+        fusion, f = None, u.autonomy.fusion
+        if f.method == "hcmci":
+            _check_consensus_estimator(loaded, i, estimator)
+            team = HcmciTeam(HcmciConfig(rounds=f.rounds, gain=f.b))  # one config for all: worlds.checks
+        elif f.method != "none":
             fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
-                                divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
-    return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents)
+                                divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz"),
+                                hcmci=f.method == "hcmci"))
+    return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents,
+                    hcmci=team)
+
+
+def _check_consensus_estimator(loaded: LoadedWorld, i: int, estimator: Any) -> None:
+    """HCMCI needs the built-in tracker with the information filter (also when an estimator was passed in code)."""
+    if not (isinstance(estimator, SingleTargetTracker) and estimator.config.filter == "scif"):
+        raise WorldError(str(loaded.path), [WorldIssue(
+            f"uavs[{i}].autonomy.estimator", type(estimator).__name__,
+            "the built-in tracker with the scif filter: fusion method hcmci fuses its information")])
 
 
 def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Any) -> Any:
@@ -382,15 +432,18 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
             p.changeVisualShape(int(body), -1, rgbaColor=CAR_RGBA, physicsClientId=scene.client)
 
     car_ids = [g.id for g in world.ground_vehicles]
+    uav_ids = [u.id for u in world.uavs]
     target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]
     query = PybulletSceneQuery(scene.client, scene.occluders)
     outage_ticks = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     return Assembly(clock=clock, scene=scene, recorder=recorder, buildings=geometry.buildings,
-                    network=geometry.network, quads=quads, cars=cars, uav_ids=[u.id for u in world.uavs],
+                    network=geometry.network, quads=quads, cars=cars, uav_ids=uav_ids,
                     car_ids=car_ids, car_kinds=car_kinds,
                     target_index=car_ids.index(target_ids[0]) if target_ids else None,
                     scene_query=query, sensors=prep.sensors, agents=prep.agents, world_spec=world,
                     channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
-                    _outage_ticks=outage_ticks,
+                    _outage_ticks=outage_ticks, hcmci=prep.hcmci,
+                    _links=None if world.comms.links is None else
+                    {frozenset(uav_ids.index(n) for n in pair) for pair in world.comms.links},
                     _sharing=any(a.agent.fusion is not None for a in prep.agents),
                     record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))

@@ -133,10 +133,11 @@ def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:
         return None
     from autonomy.sensing.channel import Channel, ChannelConfig, LinkOutage
 
-    given = comms.model_dump(exclude_none=True, exclude={"model", "base_station", "outages"})
+    given = comms.model_dump(exclude_none=True, exclude={"model", "base_station", "outages", "links"})
     outages = tuple(LinkOutage(node_a=o.link[0], node_b=o.link[1], start_s=o.start_s, end_s=o.end_s)
                     for o in comms.outages)
-    return Channel(ChannelConfig(**given, outages=outages), physics_hz, rng, scene)
+    links = None if comms.links is None else tuple(tuple(pair) for pair in comms.links)
+    return Channel(ChannelConfig(**given, outages=outages, links=links), physics_hz, rng, scene)
 
 
 def fleet_options(world: World) -> Any:

@@ -4,10 +4,13 @@
 
 - ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
   failures / fallbacks / retries (and escalations, for tiered solvers) and solve time p50 / p95 (ms), standoff error
-  (m) and, with several trackers, phase error (deg);
+  (m) and, with several trackers, phase error (deg); with HCMCI fusion, ``consensus_steps`` (steps the UAV took part
+  in the team's consensus);
+- ``consensus`` (HCMCI worlds): ``team_steps`` and ``active_links_mean`` (links up per team step);
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
-  ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses).
+  ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses; under HCMCI the UAV's
+  own estimate is its consensus posterior).
 """
 
 from __future__ import annotations
@@ -124,10 +127,16 @@ class MetricsTracker:
                     m["solver_escalations"] = s["escalations"]
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
+            if i < len(asm.agents) and getattr(asm.agents[i], "hcmci", False):
+                m["consensus_steps"] = asm.consensus_steps.get(i, 0)
             uavs[uid] = m
         if self.phase_err:
             out["phase_error_mean_deg"] = float(np.mean(self.phase_err))
         out["uavs"] = uavs
+        if getattr(asm, "hcmci", None) is not None:
+            out["consensus"] = {"team_steps": asm.hcmci.steps,
+                                "active_links_mean": float(np.mean(asm.consensus_links)) if asm.consensus_links
+                                else None}
         if asm.channel is not None:
             cs = asm.channel.stats
             out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,

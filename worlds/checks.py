@@ -74,6 +74,7 @@ def check_world(world: World) -> list[WorldIssue]:
         if not has_roads:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
                                      "a road network in 'roads' for the vehicle to drive on"))
+    issues.extend(_hcmci_issues(world))
     uav_ids = {u.id for u in world.uavs} | {"base"}
     for i, o in enumerate(world.comms.outages):
         if o.end_s <= o.start_s:
@@ -82,4 +83,32 @@ def check_world(world: World) -> list[WorldIssue]:
             if node not in uav_ids:
                 issues.append(WorldIssue(f"comms.outages[{i}].link[{k}]", node,
                                          f"a UAV id or 'base' ({sorted(uav_ids)})"))
+    for i, pair in enumerate(world.comms.links or []):
+        for k, node in enumerate(pair):
+            if node not in uav_ids - {"base"}:
+                issues.append(WorldIssue(f"comms.links[{i}][{k}]", node,
+                                         f"a UAV id ({sorted(uav_ids - {'base'})})"))
+        if pair[0] == pair[1]:
+            issues.append(WorldIssue(f"comms.links[{i}]", list(pair), "two different UAV ids"))
+    return issues
+
+
+def _hcmci_issues(world: World) -> list[WorldIssue]:
+    """HCMCI fuses information filters (``scif``), and the team runs one consensus: one ``rounds`` and ``b``."""
+    issues: list[WorldIssue] = []
+    first = None
+    for i, uav in enumerate(world.uavs):
+        fusion = uav.autonomy.fusion
+        if fusion.method != "hcmci":
+            continue
+        est = uav.autonomy.estimator.type
+        if est != "scif":
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est,
+                                     "scif: fusion method hcmci fuses square-root information filters"))
+        if first is None:
+            first = (i, fusion.rounds, fusion.b)
+        elif (fusion.rounds, fusion.b) != first[1:]:
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.fusion", {"rounds": fusion.rounds, "b": fusion.b},
+                                     f"the rounds and b of uavs[{first[0]}] (rounds={first[1]}, b={first[2]!r}): "
+                                     "the hcmci team runs one consensus"))
     return issues

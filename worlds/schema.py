@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 __all__ = [
     "AutonomySpec",
@@ -287,11 +287,34 @@ class GuidanceSpec(Strict):
 
 
 class FusionSpec(Strict):
-    """Track-to-track fusion of the teammates' shared estimates (``autonomy.fusion.track_fusion``)."""
+    """Fusion across the team: track-to-track fusion of the teammates' shared estimates (``convex``,
+    ``covariance_intersection``: ``autonomy.fusion.track_fusion``), or HCMCI consensus on information (``hcmci``:
+    ``autonomy.fusion.hcmci_team``; needs the ``scif`` estimator; the UAVs due at a tick fuse as a team over the radio
+    links that are up)."""
 
-    method: Literal["none", "convex", "covariance_intersection"] = "none"
+    method: Literal["none", "convex", "covariance_intersection", "hcmci"] = "none"
     max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
     q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
+    rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")
+    b: float | Literal["safe"] = Field("safe", description="hcmci: gain on the averaged measurement information, "
+                                                           "'safe' (no measurement counted twice) or a number > 0 "
+                                                           "(e.g. the team size N)")
+
+    @field_validator("b", mode="before")
+    @classmethod
+    def _gain(cls, value: Any) -> Any:
+        if value == "safe" or (isinstance(value, int | float) and not isinstance(value, bool) and value > 0
+                               and value != float("inf")):
+            return value
+        raise ValueError("'safe' or a finite number > 0")
+
+    @model_validator(mode="after")
+    def _hcmci_keys(self) -> FusionSpec:
+        # a resolved world (model_dump) carries both at their defaults: only other values are errors
+        extra = [k for k in ("b", "rounds") if getattr(self, k) != type(self).model_fields[k].default]
+        if extra and self.method != "hcmci":
+            raise ValueError(f"{' and '.join(extra)} only with method hcmci (method is {self.method!r})")
+        return self
 
 
 class AutonomySpec(Strict):
@@ -333,6 +356,10 @@ class CommsSection(Strict):
     block_by_buildings: bool | None = Field(None, description="no link through a building (line of sight)")
     latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
     base_station: Vec3 | None = None
+    links: list[tuple[str, str]] | None = Field(
+        None, description="the radio graph: only these pairs of UAV ids have a link (None: every pair). Under a radio "
+                          "model no message crosses another pair; under perfect comms teammates' states stay known "
+                          "to all and the links (and outages) shape the hcmci consensus graph")
     outages: list[OutageSpec] = Field(default_factory=list)
 
 

@@ -133,3 +133,47 @@ def test_a_key_named_like_a_sensor_type_keeps_its_path(tmp_path):
     text = str(info.value)
     assert "render.camera = 'fisheye'" in text
     assert "uavs[0].sensors[0].rate_hz = -5" in text
+
+
+HCMCI = GOOD + """\
+    autonomy:
+      estimator: {type: scif, model: singer}
+      fusion: {method: hcmci, rounds: 4, b: 2}
+  - id: u2
+    initial: {position: [10, 0, 30]}
+    autonomy:
+      estimator: {type: scif}
+      fusion: {method: hcmci, rounds: 4, b: 2}
+comms:
+  links: [[u1, u2]]
+"""
+
+
+def test_hcmci_fusion_loads_with_its_rounds_gain_and_links(tmp_path):
+    world = load_world(write(tmp_path, HCMCI)).world
+    f = world.uavs[0].autonomy.fusion
+    assert (f.method, f.rounds, f.b) == ("hcmci", 4, 2)
+    assert world.comms.links == [("u1", "u2")]
+    defaults = load_world(write(tmp_path, HCMCI.replace(", rounds: 4, b: 2", ""))).world.uavs[1].autonomy.fusion
+    assert (defaults.rounds, defaults.b) == (3, "safe")
+
+
+@pytest.mark.parametrize("old, new, path, value, expected", [
+    ("{type: scif}", "{type: ekf}", "uavs[1].autonomy.estimator.type", "ekf", "scif"),
+    ("hcmci, rounds: 4, b: 2}\n  - id", "hcmci, rounds: 0, b: 2}\n  - id", "uavs[0].autonomy.fusion.rounds", 0,
+     "greater than or equal to 1"),
+    ("hcmci, rounds: 4, b: 2}\n  - id", "hcmci, rounds: 4, b: lots}\n  - id", "uavs[0].autonomy.fusion.b", "lots",
+     "'safe' or a finite number > 0"),
+    ("hcmci, rounds: 4, b: 2}\ncomms", "hcmci, rounds: 5, b: 2}\ncomms", "uavs[1].autonomy.fusion",
+     {"rounds": 5, "b": 2}, "the hcmci team runs one consensus"),
+    ("hcmci, rounds: 4, b: 2}\ncomms", "convex, rounds: 4}\ncomms", "uavs[1].autonomy.fusion",
+     {"method": "convex", "rounds": 4}, "only with method hcmci"),
+    ("[[u1, u2]]", "[[u1, u7]]", "comms.links[0][1]", "u7", "a UAV id"),
+])
+def test_bad_hcmci_settings_are_named(tmp_path, old, new, path, value, expected):
+    assert old in HCMCI
+    path_file = write(tmp_path, HCMCI.replace(old, new))
+    err = error_of(path_file)
+    issue = err.issues[0]
+    assert (issue.path, issue.value) == (path, value)
+    assert expected in issue.expected and str(path_file) in str(err)

@@ -129,6 +129,12 @@ class NmpcConfig:
         Oldest previous plan (in steps) the shifted-plan fallback may use, >= 0.
     fallback : VectorFieldConfig | None
         Vector-field fallback; ``None`` derives one from this configuration.
+    restart_probe : bool
+        When a warm-started plan rides the speed floor on half the horizon or more, solve again from the vector-field
+        guess and keep the cheaper plan (multi-start against the slow looping local minimum after a target stops;
+        counted in ``stats.restart_probes`` / ``stats.restarts``; see :mod:`autonomy.guidance.nmpc`).
+    restart_probe_interval_s : float
+        After a probe whose plan was not kept, the next probe waits this long (s), >= 0.
     compiled : bool
         Compile the fast solver's functions to C (cached on disk, :mod:`autonomy.guidance.codegen`); the solutions
         are the same as uncompiled, each solve ≈ 20 % faster. The first construction of a problem on a machine
@@ -168,6 +174,8 @@ class NmpcConfig:
     enforce_time_budget: bool = False
     fallback_max_shift: int = 10
     fallback: VectorFieldConfig | None = None
+    restart_probe: bool = False
+    restart_probe_interval_s: float = 2.0
     compiled: bool = True
 
     def __post_init__(self) -> None:
@@ -176,7 +184,8 @@ class NmpcConfig:
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"NmpcConfig.{name} must be > 0, got {v}")
-        for name in ("min_speed", "building_margin", "building_vertical_clearance", "convexify_margin"):
+        for name in ("min_speed", "building_margin", "building_vertical_clearance", "convexify_margin",
+                     "restart_probe_interval_s"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"NmpcConfig.{name} must be >= 0, got {v}")

@@ -219,3 +219,42 @@ def test_tiered_escalates_a_capped_gauss_newton_solve_to_the_curvature_tier():
     assert g.stats.summary()["escalations"] == g.stats.escalations
     g2 = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, hessian="gauss_newton"), 0)
     assert g2._curv_solver is None  # a single tier: nothing to escalate to
+
+
+def _looping_warm_start(probe: bool):
+    """A UAV on the orbit of a stopped target, flying clockwise against the counter-clockwise orbit at the speed
+    floor, warm-started from a plan that loops at the floor speed and full turn rate (the state road_standoff's
+    UAVs were found in after the car stopped)."""
+    cfg = NmpcConfig(standoff_radius=RD, team_size=2, restart_probe=probe)
+    g = NmpcStandoffGuidance(cfg, 0)
+    ang, a2 = np.radians(-146.0), np.radians(52.0)
+    yaw = ang - np.pi / 2
+    own = OwnState(t=0.0, p_W=[RD * np.cos(ang), RD * np.sin(ang), 60.0],
+                   v_W=[6 * np.cos(yaw), 6 * np.sin(yaw), 0.0], yaw=yaw)
+    tgt = TargetEstimate(t=0.0, p_W=np.zeros(3), v_W=np.zeros(3))
+    mate = TeammateState(id=1, t=0.0, p_W=[RD * np.cos(a2), RD * np.sin(a2), 60.0],
+                         v_W=[-12 * np.sin(a2), 12 * np.cos(a2), 0.0], yaw=a2 + np.pi / 2)
+    n = cfg.horizon
+    x = g._initial_state(own, 0.0)
+    U = np.tile([cfg.speed_bounds[0], cfg.max_heading_rate], (n, 1))
+    X = [x := np.asarray(g._f_d(x, u)).reshape(-1) for u in U]
+    g._plan_x, g._plan_u, g._plan_t = np.vstack([g._initial_state(own, 0.0), X]), U, -0.5
+    g._w0 = np.concatenate([np.array(X).reshape(-1), U.reshape(-1), np.zeros(n)])
+    g._lam_g0, g._lam_x0 = np.zeros(g._n_g), np.zeros(g._lbx.size)
+    return g, own, tgt, mate
+
+
+def test_restart_probe_keeps_the_cheaper_plan():
+    costs = {}
+    for probe in (False, True):
+        g, own, tgt, mate = _looping_warm_start(probe)
+        g.command(own, tgt, [mate], 0.0)
+        par = g._parameters(g._initial_state(own, 0.0), own, tgt, [mate], 0.0)
+        costs[probe] = g._cost(g._w0, par)
+        assert g.stats.failures == 0
+        if probe:  # the warm solution rode the floor: probed from the vector-field guess, and that plan was cheaper
+            assert g.stats.restart_probes == 1 and g.stats.restarts == 1
+            assert g.stats.summary()["restarts"] == 1
+        else:
+            assert np.mean(g._plan_u[:, 0] <= g.config.speed_bounds[0] + 1e-3) >= 0.5 and g.stats.restart_probes == 0
+    assert costs[True] < costs[False] - 1e-3 * abs(costs[False])

@@ -10,6 +10,10 @@ from worlds.schema import World
 
 __all__ = ["check_world", "rate_divisor"]
 
+TRACKER_TARGET_HEIGHT = 0.0
+"""m: the tracker's default ``target_height`` (``autonomy.estimation.tracker.TrackerConfig``; not imported here, where
+worlds are checked without building anything)."""
+
 
 def rate_divisor(rate_hz: float, physics_hz: int) -> int | None:
     """Ticks between events of a component at ``rate_hz``, or None if ``rate_hz`` does not divide ``physics_hz``."""
@@ -94,21 +98,34 @@ def check_world(world: World) -> list[WorldIssue]:
 
 
 def _hcmci_issues(world: World) -> list[WorldIssue]:
-    """HCMCI fuses information filters (``scif``), and the team runs one consensus: one ``rounds`` and ``b``."""
+    """HCMCI fuses information filters (``scif``), and the team runs one consensus: one ``rounds`` and ``b``, and one
+    state to average — the same motion model (``cv`` has 4 states, ``singer`` 6) on the same target plane
+    (``params.target_height``: the nodes' measurement models must place the one target at one height)."""
     issues: list[WorldIssue] = []
     first = None
     for i, uav in enumerate(world.uavs):
         fusion = uav.autonomy.fusion
         if fusion.method != "hcmci":
             continue
-        est = uav.autonomy.estimator.type
-        if est != "scif":
-            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est,
+        est = uav.autonomy.estimator
+        if est.type != "scif":
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.type", est.type,
                                      "scif: fusion method hcmci fuses square-root information filters"))
+        height = est.params.get("target_height", TRACKER_TARGET_HEIGHT)
         if first is None:
-            first = (i, fusion.rounds, fusion.b)
-        elif (fusion.rounds, fusion.b) != first[1:]:
+            first = (i, fusion.rounds, fusion.b, est.model, height)
+            continue
+        k = first[0]
+        if (fusion.rounds, fusion.b) != first[1:3]:
             issues.append(WorldIssue(f"uavs[{i}].autonomy.fusion", {"rounds": fusion.rounds, "b": fusion.b},
-                                     f"the rounds and b of uavs[{first[0]}] (rounds={first[1]}, b={first[2]!r}): "
+                                     f"the rounds and b of uavs[{k}] (rounds={first[1]}, b={first[2]!r}): "
                                      "the hcmci team runs one consensus"))
+        if est.model != first[3]:
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.model", est.model,
+                                     f"{first[3]!r}, the estimator model of uavs[{k}]: the hcmci team averages one "
+                                     "state layout (cv: 4 states, singer: 6)"))
+        if height != first[4]:
+            issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.params.target_height", height,
+                                     f"{first[4]!r}, the target height of uavs[{k}]: the hcmci team tracks one "
+                                     "target on one plane"))
     return issues

@@ -97,7 +97,10 @@ def consensus_adjacency(links_up: np.ndarray, takes_part: Sequence[bool]) -> np.
 
 
 def fuse_team(infos: Sequence[TrackInformation | None], links_up: np.ndarray, config: HcmciConfig) -> TeamStep:
-    """HCMCI over the nodes with a track (``infos[j]`` not None) on the links of ``links_up`` among them."""
+    """HCMCI over the nodes with a track (``infos[j]`` not None) on the links of ``links_up`` among them.
+
+    Raises ValueError unless those nodes' priors hold at one time and have one state size (one motion model).
+    """
     A = consensus_adjacency(links_up, [x is not None for x in infos])
     nodes = [j for j, x in enumerate(infos) if x is not None]
     posteriors: list[SqrtInformation | None] = [None] * len(infos)
@@ -105,6 +108,10 @@ def fuse_team(infos: Sequence[TrackInformation | None], links_up: np.ndarray, co
         times = {infos[j].t for j in nodes}
         if max(times) - min(times) > 1e-9:
             raise ValueError(f"team members' priors must hold at one time, got {sorted(times)}")
+        sizes = [infos[j].prior.h.size for j in nodes]
+        if len(set(sizes)) > 1:
+            raise ValueError(f"team members' priors must have one state size (one motion model), got sizes {sizes} "
+                             f"for nodes {nodes}")
         sub = A[np.ix_(nodes, nodes)]
         fused = hcmci([infos[j].prior for j in nodes], [infos[j].contribution for j in nodes], sub, config.rounds,
                       config.gain)

@@ -86,6 +86,15 @@ def test_priors_at_different_times_are_refused():
         fuse_team(infos, ~np.eye(2, dtype=bool), HcmciConfig())
 
 
+def test_priors_of_different_state_sizes_are_refused():
+    infos = _infos(4, 2)
+    rng = np.random.default_rng(7)
+    S4 = tria(rng.normal(size=(4, 4)))  # a 4-state (cv) prior beside 6-state (singer) ones
+    infos[1] = TrackInformation(t=infos[1].t, prior=SqrtInformation(S4, rng.normal(size=4)), contribution=None)
+    with pytest.raises(ValueError, match="state size"):
+        fuse_team(infos, ~np.eye(2, dtype=bool), HcmciConfig())
+
+
 @pytest.mark.parametrize("kwargs, match", [({"rounds": 0}, "rounds"), ({"rounds": 2.5}, "rounds"),
                                            ({"gain": "big"}, "gain"), ({"gain": -1.0}, "gain")])
 def test_bad_settings_are_named(kwargs, match):

@@ -142,7 +142,7 @@ HCMCI = GOOD + """\
   - id: u2
     initial: {position: [10, 0, 30]}
     autonomy:
-      estimator: {type: scif}
+      estimator: {model: singer, type: scif}
       fusion: {method: hcmci, rounds: 4, b: 2}
 comms:
   links: [[u1, u2]]
@@ -159,7 +159,11 @@ def test_hcmci_fusion_loads_with_its_rounds_gain_and_links(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, path, value, expected", [
-    ("{type: scif}", "{type: ekf}", "uavs[1].autonomy.estimator.type", "ekf", "scif"),
+    ("{model: singer, type: scif}", "{model: singer, type: ekf}", "uavs[1].autonomy.estimator.type", "ekf", "scif"),
+    ("{model: singer, type: scif}", "{model: cv, type: scif}", "uavs[1].autonomy.estimator.model", "cv",
+     "'singer', the estimator model of uavs[0]"),
+    ("{model: singer, type: scif}", "{model: singer, type: scif, params: {target_height: 1.5}}",
+     "uavs[1].autonomy.estimator.params.target_height", 1.5, "0.0, the target height of uavs[0]"),
     ("hcmci, rounds: 4, b: 2}\n  - id", "hcmci, rounds: 0, b: 2}\n  - id", "uavs[0].autonomy.fusion.rounds", 0,
      "greater than or equal to 1"),
     ("hcmci, rounds: 4, b: 2}\n  - id", "hcmci, rounds: 4, b: lots}\n  - id", "uavs[0].autonomy.fusion.b", "lots",

@@ -14,11 +14,13 @@ velocity of the pair. A lone false alarm therefore never starts a track, and clu
 are spread over the radar's whole field of regard.
 
 In a consensus team (HCMCI, :mod:`autonomy.fusion.hcmci_team`) :meth:`SingleTargetTracker.step_information` replaces
-:meth:`~SingleTargetTracker.step`: the same initiation, gating and association, but the gated update of the last scan,
-when that scan was taken at the step time, is returned as the scan's information contribution together with the
-track's prior at that time instead of being applied; the team's consensus result then goes back through
-:meth:`~SingleTargetTracker.set_information`. Scans older than the step time are applied locally (prediction to a
-common time before contributing is exact only for a scan taken at that time).
+:meth:`~SingleTargetTracker.step`: the same initiation, gating and association, but the gated detections of the scans
+taken at the step time (one per sensor) are not applied: their information contributions, each made against the
+track's prior at that time, are summed (``S_I = tria([S_I,1, S_I,2, …])``, ``i = i_1 + i_2 + …``) and returned with
+that prior; the team's consensus result then goes back through :meth:`~SingleTargetTracker.set_information`. Scans
+older than the step time are applied locally first: a contribution ``(S_I, i)`` is information about the state at the
+scan's own time, and adds exactly to a prior only at that time (there is no exact way to move it to a later prior
+through the process noise).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from scipy.special import gammaincinv
 
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.factory import make_filter
+from autonomy.estimation.linalg import tria
 from autonomy.estimation.measurements import measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
 from autonomy.estimation.scif import SqrtInformation
@@ -50,7 +53,8 @@ class TrackInformation:
     prior : SqrtInformation
         The track predicted to ``t`` (after any older scans were applied locally): ``(S_h⁻, ĥ⁻)``.
     contribution : SqrtInformation | None
-        Information ``(S_I, i)`` of the gated detection of the scan taken at ``t``; None if there was none.
+        Information ``(S_I, i)`` of the gated detections of the scans taken at ``t`` (one per scan, summed); None if
+        there was none.
     """
 
     t: float
@@ -271,8 +275,9 @@ class SingleTargetTracker:
         return self.estimate(t)
 
     def step_information(self, t: float, detections: Sequence[object]) -> TrackInformation | None:
-        """Like :meth:`step`, but the gated detection of the last scan, if that scan was taken at ``t`` (s), is not
-        applied: it is returned as its information contribution beside the track's prior at ``t``.
+        """Like :meth:`step`, but the gated detections of the scans taken at ``t`` (s) are not applied: the sum of
+        their information contributions is returned beside the track's prior at ``t`` (module docstring). Older scans
+        are applied locally first.
 
         Apply the fused result with :meth:`set_information`, then read it with :meth:`estimate`. Needs an
         information filter (``scif``). Returns None without a track (also when the track was dropped as lost).
@@ -297,17 +302,18 @@ class SingleTargetTracker:
         self.filter.set_information(info)
 
     def _absorb(self, detections: Sequence[object], defer_at: float | None) -> SqrtInformation | None:
-        """Initiate, gate and update from ``detections``; with ``defer_at`` (s), the gated detection of the last scan,
-        if taken at ``defer_at``, gives its information contribution (returned) instead of an update."""
+        """Initiate, gate and update from ``detections``; with ``defer_at`` (s), the gated detections of the scans
+        taken at ``defer_at`` give their summed information contribution (returned) instead of updates."""
         scans: dict[tuple[float, str], list] = {}
         for d in detections:
             scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
         ordered = sorted(scans.items(), key=lambda kv: kv[0][0])
-        contribution = None
-        for k, ((t_meas, _), dets) in enumerate(ordered):
+        deferred: list[SqrtInformation] = []  # contributions against the current filter's prior at defer_at
+        for (t_meas, _), dets in ordered:
             if self.filter is not None and t_meas - self.last_update_t > self.config.lost_after_s:
                 self.filter = None
             if self.filter is None:
+                deferred = []  # made against a track that is gone
                 self._initiate(dets)
                 continue
             if t_meas < self.filter.t:
@@ -325,19 +331,24 @@ class SingleTargetTracker:
                 self._missed += fixing
                 if self._missed >= self.config.max_missed_scans:  # diverged: start again from these fixes
                     self.filter = None
+                    deferred = []
                     self.dropped_diverged += 1
                     self._tentative = []
                     self._initiate(dets)
                 continue
-            if defer_at is not None and k == len(ordered) - 1 and abs(t_meas - defer_at) <= TIME_TOLERANCE:
-                contribution = self.filter.information(best)[0]
+            if defer_at is not None and abs(t_meas - defer_at) <= TIME_TOLERANCE:
+                deferred.append(self.filter.information(best)[0])
             else:
                 self.filter.update(best)
             if _fixes_position(best):
                 self._missed = 0
             self.updates += 1
             self.last_update_t = t_meas
-        return contribution
+        if not deferred:
+            return None
+        if len(deferred) == 1:
+            return deferred[0]
+        return SqrtInformation(tria(np.hstack([c.S for c in deferred])), np.sum([c.h for c in deferred], axis=0))
 
     def estimate(self, t: float) -> TargetEstimate | None:
         """The track's estimate predicted to ``t`` (s), or None without a track (dropping it if lost by ``t``)."""

@@ -1,5 +1,8 @@
 """HCMCI team step (autonomy.fusion.hcmci_team) and the tracker's information step it runs on."""
 
+import copy
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -146,6 +149,26 @@ def test_information_step_defers_only_a_scan_taken_at_the_step_time():
     late = trk2.step_information(2.1, scans[4])  # the scan is older than the step: applied locally
     assert late.contribution is None and trk2.filter.t == pytest.approx(2.1)
     assert trk2.updates == trk.updates
+
+
+def test_information_step_sums_the_contributions_of_every_scan_taken_at_the_step_time():
+    rng = np.random.default_rng(8)
+    trk = SingleTargetTracker(CFG)
+    for k, scan in enumerate(_scans(6, 4)):
+        trk.step(0.5 * k, scan)
+    ref = copy.deepcopy(trk)
+    ref.filter.predict(2.0)
+    truth = (2.0 * 2.0, 2.0, 0.0)
+    scans = [_radar(truth, (30.0, -20.0, 40.0), 2.0, rng), _radar(truth, (-25.0, 10.0, 35.0), 2.0, rng)]
+    scans[1] = dataclasses.replace(scans[1], sensor_id="radar2")  # a second sensor, same time
+    own = [copy.deepcopy(ref).filter.information(d)[0] for d in scans]  # each against the prior at 2.0
+    updates = trk.updates
+    info = trk.step_information(2.0, scans)
+    assert trk.updates == updates + 2 and trk.filter.t == pytest.approx(2.0)
+    assert np.allclose(_Y(info.prior), _Y(ref.filter.information_state), rtol=1e-9, atol=1e-9)
+    assert np.allclose(info.prior.h, ref.filter.information_state.h, rtol=1e-9, atol=1e-9)
+    assert np.allclose(_Y(info.contribution), _Y(own[0]) + _Y(own[1]), rtol=1e-9, atol=1e-9)
+    assert np.allclose(info.contribution.h, own[0].h + own[1].h, rtol=1e-9, atol=1e-9)
 
 
 def test_information_step_needs_the_information_filter():

@@ -82,8 +82,8 @@ class Assembly:
     event_counts_by_uav: dict = field(default_factory=dict)
     _contacts: set = field(default_factory=set)
     hcmci: HcmciTeam | None = None
-    consensus_steps: dict[int, int] = field(default_factory=dict)
-    consensus_links: list[int] = field(default_factory=list)
+    consensus_linked_steps: dict[int, int] = field(default_factory=dict)  # per UAV: team steps with a link up
+    consensus_links: list[int] = field(default_factory=list)  # per team step: links up between nodes with a track
     _links: set | None = None  # comms.links as frozensets of UAV indices (None: every pair)
 
     # -- truth ---------------------------------------------------------------------------------------------------
@@ -163,8 +163,8 @@ class Assembly:
         uavs = [a.uav for a in slots]
         ready = [a.agent.take_ready(t) for a in slots]
         estimates, fused = self.hcmci.step(t, [a.agent.estimator for a in slots], ready, self.links_up(uavs, tick))
-        for j, post in zip(uavs, fused.posteriors, strict=True):
-            self.consensus_steps[j] = self.consensus_steps.get(j, 0) + (post is not None)
+        for j, degree in zip(uavs, fused.adjacency.sum(axis=1), strict=True):  # a cut-off node fuses only itself
+            self.consensus_linked_steps[j] = self.consensus_linked_steps.get(j, 0) + bool(degree > 0)
         self.consensus_links.append(fused.active_links)
         return {j: (est, len(r)) for j, est, r in zip(uavs, estimates, ready, strict=True)}
 

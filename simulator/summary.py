@@ -4,9 +4,11 @@
 
 - ``uavs.<id>``: minimum separation to any other UAV (m), collisions, command saturations, guidance solver calls /
   failures / fallbacks / retries (and escalations, for tiered solvers) and solve time p50 / p95 (ms), standoff error
-  (m) and, with several trackers, phase error (deg); with HCMCI fusion, ``consensus_steps`` (steps the UAV took part
-  in the team's consensus);
-- ``consensus`` (HCMCI worlds): ``team_steps`` and ``active_links_mean`` (links up per team step);
+  (m) and, with several trackers, phase error (deg); with HCMCI fusion, ``consensus_linked_steps`` (team steps at
+  which the UAV held a track and had at least one link up to another node with a track: steps it fused with the team,
+  not only with itself);
+- ``consensus`` (HCMCI worlds): ``team_steps`` and ``active_links_mean`` (links up between nodes that hold a track,
+  averaged over the team steps);
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses; under HCMCI the UAV's
@@ -130,7 +132,7 @@ class MetricsTracker:
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
             if i < len(asm.agents) and getattr(asm.agents[i], "hcmci", False):
-                m["consensus_steps"] = asm.consensus_steps.get(i, 0)
+                m["consensus_linked_steps"] = asm.consensus_linked_steps.get(i, 0)
             uavs[uid] = m
         if self.phase_err:
             out["phase_error_mean_deg"] = float(np.mean(self.phase_err))

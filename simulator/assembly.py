@@ -11,11 +11,12 @@ import pybullet as p
 
 from autonomy.agent import Agent
 from autonomy.estimation.tracker import SingleTargetTracker
-from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam, pair_adjacency
+from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.camera import CAR_RGBA
+from autonomy.sensing.channel import scheduled_links
 from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
@@ -84,7 +85,6 @@ class Assembly:
     hcmci: HcmciTeam | None = None
     consensus_linked_steps: dict[int, int] = field(default_factory=dict)  # per UAV: team steps with a link up
     consensus_links: list[int] = field(default_factory=list)  # per team step: links up between nodes with a track
-    _links: set | None = None  # comms.links as frozensets of UAV indices (None: every pair)
 
     # -- truth ---------------------------------------------------------------------------------------------------
     def target_truth(self) -> TargetTruth:
@@ -150,11 +150,7 @@ class Assembly:
         if self.channel is not None:
             st = self.quads.state
             return self.channel.sample_links(ids, {u: st.p_W[j] for u, j in zip(ids, uavs, strict=True)}, tick)
-        down = {frozenset((a, b)) for a, b, start, end in self._outage_ticks if start <= tick < end}
-        pairs = [(k, m) for k in range(len(uavs)) for m in range(k + 1, len(uavs))
-                 if (self._links is None or frozenset((uavs[k], uavs[m])) in self._links)
-                 and frozenset((ids[k], ids[m])) not in down]
-        return pair_adjacency(len(uavs), pairs)
+        return scheduled_links(ids, self.world_spec.comms.links, self._outage_ticks, tick)
 
     def _team_step(self, t: float, tick: int, slots: list[AgentSlot]) -> dict[int, tuple[Any, int]]:
         """Estimation of the HCMCI agents due at ``tick``, as one team: each UAV's (estimate, detections used)."""
@@ -443,7 +439,5 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
                     scene_query=query, sensors=prep.sensors, agents=prep.agents, world_spec=world,
                     channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
                     _outage_ticks=outage_ticks, hcmci=prep.hcmci,
-                    _links=None if world.comms.links is None else
-                    {frozenset(uav_ids.index(n) for n in pair) for pair in world.comms.links},
                     _sharing=any(a.agent.fusion is not None for a in prep.agents),
                     record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))

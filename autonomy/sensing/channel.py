@@ -17,7 +17,7 @@ probabilities. Erasures are independent per hop; each hop adds ``latency_s``.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,7 +27,8 @@ from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
 from .messages import Envelope, Message
 from .scene import SceneQuery
 
-__all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "minimum_spanning_tree_routes"]
+__all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "minimum_spanning_tree_routes",
+           "outage_holds", "scheduled_links"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -194,6 +195,29 @@ class RoutingTree:
         return float(np.prod([self.link_probability[i, j] for i, j in itertools.pairwise(idx)]))
 
 
+def outage_holds(a: str, b: str, outages: Iterable[tuple[str, str, int, int]], tick: int) -> bool:
+    """Whether one of ``outages`` ``(node_a, node_b, start_tick, end_tick)`` holds link ``a``-``b`` down at ``tick``
+    (``start_tick <= tick < end_tick``, either direction)."""
+    pair = frozenset((a, b))
+    return any(pair == frozenset((x, y)) and start <= tick < end for x, y, start, end in outages)
+
+
+def scheduled_links(nodes: Sequence[str], links: Iterable[tuple[str, str]] | None,
+                    outages: Iterable[tuple[str, str, int, int]], tick: int) -> np.ndarray:
+    """(N, N) symmetric bool: which pairs of ``nodes`` may talk at ``tick`` before any radio effect — the pairs of the
+    fixed topology ``links`` (every pair when None) that no outage ``(node_a, node_b, start_tick, end_tick)`` holds
+    down (:func:`outage_holds`). Diagonal False. Perfect comms use this as the link state; the radio multiplies it
+    into its delivery probabilities."""
+    nodes = tuple(nodes)
+    pairs = None if links is None else {frozenset(p) for p in links}
+    outages = tuple(outages)
+    up = np.zeros((len(nodes), len(nodes)), dtype=bool)
+    for i, j in itertools.combinations(range(len(nodes)), 2):
+        listed = pairs is None or frozenset((nodes[i], nodes[j])) in pairs
+        up[i, j] = up[j, i] = listed and not outage_holds(nodes[i], nodes[j], outages, tick)
+    return up
+
+
 def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
     """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
 
@@ -254,20 +278,19 @@ class Channel:
         self.latency_ticks = round(lat)
         self._outages = [
             (
-                frozenset((o.node_a, o.node_b)),
+                o.node_a,
+                o.node_b,
                 int(np.ceil(o.start_s * tick_hz - 1e-9)),
                 int(np.ceil(o.end_s * tick_hz - 1e-9)),
             )
             for o in config.outages
         ]
-        self._pairs = None if config.links is None else {frozenset(p) for p in config.links}
         self._queue: list[Envelope] = []
         self._counts: dict[tuple[str, str], list[int]] = {}
 
     def link_down(self, a: str, b: str, tick: int) -> bool:
         """Whether a scheduled outage holds link ``a``-``b`` down at ``tick``."""
-        pair = frozenset((a, b))
-        return any(pair == link and start <= tick < end for link, start, end in self._outages)
+        return outage_holds(a, b, self._outages, tick)
 
     def link_matrix(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
         """(N, N) symmetric delivery probabilities between ``nodes`` at ``tick`` (diagonal 1)."""
@@ -280,10 +303,7 @@ class Channel:
             clear = np.asarray(self.scene.line_of_sight(pts[iu], pts[ju]), dtype=bool)
             P[iu[~clear], ju[~clear]] = 0.0
             P[ju[~clear], iu[~clear]] = 0.0
-        for i, j in zip(iu, ju, strict=True):
-            unlinked = self._pairs is not None and frozenset((nodes[i], nodes[j])) not in self._pairs
-            if unlinked or self.link_down(nodes[i], nodes[j], tick):
-                P[i, j] = P[j, i] = 0.0
+        P[~scheduled_links(nodes, self.config.links, self._outages, tick)] = 0.0
         np.fill_diagonal(P, 1.0)
         return P
 

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from autonomy.sensing.channel import Channel, ChannelConfig, LinkOutage, minimum_spanning_tree_routes
+from autonomy.sensing.channel import (
+    Channel,
+    ChannelConfig,
+    LinkOutage,
+    minimum_spanning_tree_routes,
+    outage_holds,
+    scheduled_links,
+)
 from autonomy.sensing.fake_scene import FakeScene
 from autonomy.sensing.messages import EstimateMessage, InformationMessage, Message
 from worlds.geometry import Building
@@ -159,3 +166,22 @@ def test_fixed_topology_cuts_unlisted_pairs_and_sampled_links_follow_the_probabi
     assert not ch.sample_links(nodes, pos, int(1.5 * TICK_HZ))[0, 2]  # the outage holds a-c down
     with pytest.raises(ValueError, match="links"):
         ChannelConfig(links=(("a", "a"),))
+
+
+def test_scheduled_links_are_the_topology_less_the_outages_and_the_radio_applies_them():
+    nodes = ("a", "b", "c")
+    outages = [("c", "a", 10, 20)]
+    assert outage_holds("a", "c", outages, 10) and not outage_holds("a", "c", outages, 20)
+    assert not outage_holds("a", "b", outages, 15)
+    every = scheduled_links(nodes, None, outages, 0)
+    assert (every == ~np.eye(3, dtype=bool)).all()
+    up = scheduled_links(nodes, [("a", "c"), ("b", "c")], outages, 15)
+    assert up.tolist() == [[False, False, False], [False, False, True], [False, True, False]]
+    ch = Channel(ChannelConfig(block_by_buildings=False, links=(("a", "c"), ("b", "c")),
+                               outages=(LinkOutage(node_a="c", node_b="a", start_s=10 / TICK_HZ, end_s=20 / TICK_HZ),)),
+                 TICK_HZ, np.random.default_rng(0))
+    pos = {n: np.array([10.0 * k, 0.0, 50.0]) for k, n in enumerate(nodes)}
+    for tick in (0, 15, 20):
+        P = ch.link_matrix(nodes, pos, tick)
+        off = ~np.eye(3, dtype=bool)
+        assert ((P[off] > 0) == scheduled_links(nodes, ch.config.links, [("c", "a", 10, 20)], tick)[off]).all()

@@ -70,9 +70,10 @@ class MetricsTracker:
             st = asm.cars.state
             k = asm.target_index
             p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
+            slots = _slots_by_uav(asm)
             for i in due:
                 self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
-                if asm.agents[i].agent.fusion is not None:
+                if slots[i].agent.fusion is not None:
                     self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
             if self.standoffs and asm.quads is not None:
                 q = asm.quads.state.p_W[:, :2]
@@ -111,14 +112,16 @@ class MetricsTracker:
         out["events"] = dict(asm.recorder.event_counts)
         out["target_index"] = asm.target_index
         uavs: dict[str, Any] = {}
+        slots = _slots_by_uav(asm)
         for i, uid in enumerate(asm.uav_ids):
+            slot = slots.get(i)
             m: dict[str, Any] = {
                 "collisions": asm.event_counts_by_uav.get(("collision", i), 0),
                 "command_saturations": asm.event_counts_by_uav.get(("command_saturated", i), 0),
             }
             if self.min_sep is not None and np.isfinite(self.min_sep[i]):
                 m["min_separation_m"] = float(self.min_sep[i])
-            stats = getattr(asm.agents[i].agent.guidance, "stats", None) if i < len(asm.agents) else None
+            stats = getattr(slot.agent.guidance, "stats", None) if slot is not None else None
             if stats is not None and hasattr(stats, "summary"):
                 s = stats.summary()
                 m.update(solver_calls=s.get("solves", 0), solver_failures=s.get("failures", 0),
@@ -131,7 +134,7 @@ class MetricsTracker:
                     m["solver_restart_probes"], m["solver_restarts"] = s["restart_probes"], s["restarts"]
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
-            if i < len(asm.agents) and getattr(asm.agents[i], "hcmci", False):
+            if getattr(slot, "hcmci", False):
                 m["consensus_linked_steps"] = asm.consensus_linked_steps.get(i, 0)
             uavs[uid] = m
         if self.phase_err:
@@ -151,6 +154,11 @@ class MetricsTracker:
             per_uav.update({f"{asm.uav_ids[i]}_fused": e.summary() for i, e in sorted(self.fused_errors.items())})
             out["targets"] = {tid: per_uav}
         return _finite_or_none(out)
+
+
+def _slots_by_uav(asm: Any) -> dict[int, Any]:
+    """The assembly's agent slots by the index of the UAV they fly (``slot.uav``), not by list position."""
+    return {a.uav: a for a in asm.agents}
 
 
 def _finite_or_none(obj: Any) -> Any:

@@ -279,7 +279,7 @@ class SingleTargetTracker:
         their information contributions is returned beside the track's prior at ``t`` (module docstring). Older scans
         are applied locally first.
 
-        Apply the fused result with :meth:`set_information`, then read it with :meth:`estimate`. Needs an
+        Apply the fused result with :meth:`set_information`, then read it with :meth:`current_estimate`. Needs an
         information filter (``scif``). Returns None without a track (also when the track was dropped as lost).
         """
         if self.config.filter != "scif":
@@ -359,6 +359,14 @@ class SingleTargetTracker:
             return None
         if t > self.filter.t:
             self.filter.predict(t)
+        return self.current_estimate()
+
+    def current_estimate(self) -> TargetEstimate | None:
+        """The track's estimate at its filter's own time, without the loss check or prediction of :meth:`estimate`
+        (e.g. right after :meth:`step_information`, which made both, and :meth:`set_information`); None without a
+        track."""
+        if self.filter is None:
+            return None
         x, P = self.filter.x, self.filter.P
         idx = self._ix + self._iv
         return TargetEstimate(t=self.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=P[np.ix_(idx, idx)])

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.scif import SqrtInformation
 from autonomy.estimation.tracker import SingleTargetTracker, TrackInformation
 from autonomy.fusion.consensus import hcmci
@@ -106,7 +107,7 @@ def fuse_team(infos: Sequence[TrackInformation | None], links_up: np.ndarray, co
     posteriors: list[SqrtInformation | None] = [None] * len(infos)
     if nodes:
         times = {infos[j].t for j in nodes}
-        if max(times) - min(times) > 1e-9:
+        if max(times) - min(times) > TIME_TOLERANCE:
             raise ValueError(f"team members' priors must hold at one time, got {sorted(times)}")
         sizes = [infos[j].prior.h.size for j in nodes]
         if len(set(sizes)) > 1:
@@ -131,7 +132,8 @@ class HcmciTeam:
              links_up: np.ndarray) -> tuple[list[TargetEstimate | None], TeamStep]:
         """One fused step at ``t`` (s): each tracker absorbs its ``detections`` (sorted by ``t_meas``), the nodes with
         a track fuse over ``links_up`` ((N, N) bool) and take their posteriors; returns each node's estimate at ``t``
-        and the fusion record."""
+        and the fusion record (the trackers' own estimates: :meth:`SingleTargetTracker.step_information` already
+        dropped lost tracks and predicted the others to ``t``)."""
         if not (len(trackers) == len(detections) == np.shape(links_up)[0]):
             raise ValueError(f"trackers ({len(trackers)}), detections ({len(detections)}) and links_up "
                              f"({np.shape(links_up)}) must have one entry per node")
@@ -141,4 +143,4 @@ class HcmciTeam:
             if post is not None:
                 trk.set_information(post)
         self.steps += 1
-        return [trk.estimate(t) for trk in trackers], result
+        return [trk.current_estimate() for trk in trackers], result

@@ -136,6 +136,24 @@ def test_a_lone_team_member_tracks_exactly_like_a_tracker_on_its_own():
     assert member.updates == alone.updates and team.steps == 12
 
 
+def test_a_team_step_reads_the_fused_tracks_without_estimating_again(monkeypatch):
+    trk = SingleTargetTracker(CFG)
+    team = HcmciTeam(HcmciConfig())
+    monkeypatch.setattr(trk, "estimate", lambda t: pytest.fail("estimate() repeats the loss check and prediction"))
+    for k, scan in enumerate(_scans(9, 4)):
+        (est,), _ = team.step(0.5 * k, [trk], [scan], np.zeros((1, 1), dtype=bool))
+    assert est is not None and est.t == pytest.approx(1.5)
+
+
+def test_priors_within_the_time_tolerance_count_as_one_time(monkeypatch):
+    import autonomy.fusion.hcmci_team as hcmci_team
+
+    monkeypatch.setattr(hcmci_team, "TIME_TOLERANCE", 0.1)  # the estimation layer's tolerance, not a literal
+    infos = _infos(4, 2)
+    infos[1] = TrackInformation(t=1.05, prior=infos[1].prior, contribution=None)
+    assert all(p is not None for p in fuse_team(infos, ~np.eye(2, dtype=bool), HcmciConfig()).posteriors)
+
+
 def test_information_step_defers_only_a_scan_taken_at_the_step_time():
     trk = SingleTargetTracker(CFG)
     scans = _scans(6, 5)

@@ -136,6 +136,36 @@ def test_a_lone_team_member_tracks_exactly_like_a_tracker_on_its_own():
     assert member.updates == alone.updates and team.steps == 12
 
 
+def test_team_members_take_the_hcmci_posteriors_of_their_priors_and_contributions():
+    sensors = [(30.0, -20.0, 40.0), (-25.0, 15.0, 40.0), (10.0, 35.0, 50.0)]
+    scans = [_scans(10 + j, 10, sensor=p) for j, p in enumerate(sensors)]
+    trackers = [SingleTargetTracker(CFG) for _ in sensors]
+    links = pair_adjacency(3, [(0, 1), (1, 2)])  # a path: node 1 hears both, nodes 0 and 2 only node 1
+    cfg = HcmciConfig(rounds=2, gain="safe")
+    team = HcmciTeam(cfg)
+    fused_steps = 0
+    for k in range(10):
+        t = 0.5 * k
+        dets = [s[k] for s in scans]
+        infos = [copy.deepcopy(trk).step_information(t, d) for trk, d in zip(trackers, dets, strict=True)]
+        estimates, step = team.step(t, trackers, dets, links)
+        if all(x is None for x in infos):
+            assert all(e is None for e in estimates)
+            continue
+        assert all(x is not None for x in infos)  # the three confirm their tracks at the same scan
+        ref = hcmci([x.prior for x in infos], [x.contribution for x in infos], links, cfg.rounds, cfg.gain)
+        for trk, r, est in zip(trackers, ref, estimates, strict=True):
+            post = trk.filter.information_state
+            assert trk.filter.t == pytest.approx(t) and est.t == pytest.approx(t)
+            assert np.allclose(_Y(post), _Y(r), rtol=1e-10, atol=1e-10)
+            assert np.allclose(post.h, r.h, rtol=1e-10, atol=1e-10)
+            xy = np.linalg.solve(_Y(r), r.h)[[trk.layout.index("x"), trk.layout.index("y")]]
+            assert np.allclose(est.p_W, xy, atol=1e-8)
+        assert step.active_links == 2
+        fused_steps += all(x.contribution is not None for x in infos)
+    assert fused_steps >= 7 and team.steps == 10
+
+
 def test_a_team_step_reads_the_fused_tracks_without_estimating_again(monkeypatch):
     trk = SingleTargetTracker(CFG)
     team = HcmciTeam(HcmciConfig())
@@ -160,7 +190,7 @@ def test_information_step_defers_only_a_scan_taken_at_the_step_time():
     for k in range(4):
         trk.step(0.5 * k, scans[k])
     at_step = trk.step_information(2.0, scans[4])
-    assert at_step.contribution is not None and at_step.t == 2.0
+    assert at_step.contribution is not None and at_step.t == 2.0 and trk.filter.t == pytest.approx(2.0)
     trk2 = SingleTargetTracker(CFG)
     for k in range(4):
         trk2.step(0.5 * k, scans[k])

@@ -23,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import os
+import platform
 import shlex
 import shutil
 import subprocess
@@ -80,18 +81,18 @@ def compiled_nlpsol(name: str, plugin: str, nlp: dict, opts: dict) -> tuple[ca.F
 
 
 def _library(solver: ca.Function, name: str, compiler: list[str]) -> Path:
-    """Path of the compiled library of ``solver``'s functions, compiling it when it is not cached."""
+    """Path of the compiled library of ``solver``'s functions, compiling it when it is not cached (a cache that is
+    read-only but holds the library is used as it is)."""
     root = cache_dir()
-    root.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=root) as tmp:
+    with tempfile.TemporaryDirectory() as tmp:
         # what solver.generate_dependencies writes, but into our own directory (it takes a bare file name only)
         gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
         gen.add(solver.oracle())
         for fname in solver.get_function():
             gen.add(solver.get_function(fname))
         src = Path(gen.generate(f"{tmp}{os.sep}"))
-        code = src.read_bytes()
-        key = hashlib.sha256(b"\0".join([code, ca.__version__.encode(), " ".join(compiler + list(_FLAGS)).encode()]))
+        key = hashlib.sha256(b"\0".join([src.read_bytes(), ca.__version__.encode(), platform.machine().encode(),
+                                         " ".join(compiler + list(_FLAGS)).encode()]))
         lib = root / f"{name}_{key.hexdigest()[:20]}.so"
         if lib.exists():
             return lib
@@ -100,7 +101,10 @@ def _library(solver: ca.Function, name: str, compiler: list[str]) -> Path:
                               check=False)
         if proc.returncode != 0:
             raise RuntimeError(f"{' '.join(compiler)} exited with {proc.returncode}: {proc.stderr.strip()[:500]}")
-        os.replace(out, lib)  # atomic: a concurrent reader sees no library or a whole one
+        root.mkdir(parents=True, exist_ok=True)
+        staged = Path(tempfile.mkstemp(dir=root, prefix=".tmp-", suffix=".so")[1])
+        shutil.copyfile(out, staged)
+        os.replace(staged, lib)  # atomic: a concurrent reader sees no library or a whole one
     return lib
 
 
@@ -125,13 +129,20 @@ class BufferedCall:
             self._buf.set_res(i, memoryview(a))
 
     def __call__(self, **args: np.ndarray | float) -> dict[str, np.ndarray]:
-        """Evaluate with the given inputs (missing ones zero); raises ``RuntimeError`` as CasADi does."""
+        """Evaluate with the given inputs (missing ones zero); raises ``RuntimeError`` as CasADi does, ``ValueError``
+        for an input name the function does not have or an input of the wrong size (a scalar fills its input)."""
+        unknown = set(args) - set(self._in)
+        if unknown:
+            raise ValueError(f"{self.fun.name()} has no input {sorted(unknown)}; inputs: {list(self._in)}")
         for name, a in self._in.items():
             v = args.get(name)
             if v is None:
                 a.fill(0.0)
-            else:
-                np.copyto(a, np.asarray(v, dtype=float).reshape(-1))
+                continue
+            v = np.asarray(v, dtype=float).reshape(-1)
+            if v.size not in (1, a.size):
+                raise ValueError(f"{self.fun.name()}.{name} takes {a.size} numbers, got {v.size}")
+            np.copyto(a, v)
         self._trigger()
         return {name: a.copy() for name, a in zip(self.fun.name_out(), self._out, strict=True)}
 

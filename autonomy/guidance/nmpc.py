@@ -288,7 +288,7 @@ class NmpcStandoffGuidance(Guidance):
         self._n_g = int(g_all.shape[0])
         lam_g = ca.SX.sym("lam_g", self._n_g)
         nlp = {"x": wvar, "p": P, "f": J, "g": g_all}
-        self._g_fun = ca.Function("g", [wvar, P], [g_all])
+        self._g_fun = BufferedCall(ca.Function("g", [wvar, P], [g_all], ["x", "p"], ["g"]))
         self._f_fun = BufferedCall(ca.Function("f", [wvar, P], [J], ["x", "p"], ["f"]))
         if c.solver == "ipopt":  # IPOPT takes the upper triangle
             hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [ca.triu(H_gn)], *_HESS_IO)
@@ -509,7 +509,7 @@ class NmpcStandoffGuidance(Guidance):
         n = self.config.horizon
         w = np.array(w0, dtype=float)
         w[-n:] = 0.0
-        gv = np.asarray(self._g_fun(w, par)).reshape(n, -1)[:, _NX:]
+        gv = self._g_fun(x=w, p=par)["g"].reshape(n, -1)[:, _NX:]
         if gv.shape[1] == 0:
             return np.zeros(n)
         return self._slack_scale * np.maximum(0.0, -gv.min(axis=1))

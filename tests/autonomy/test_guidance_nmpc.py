@@ -162,7 +162,7 @@ def test_unused_constraint_slots_never_bind():
     x0 = g._initial_state(own, 0.0)
     par = g._parameters(x0, own, tgt, [], 0.0)  # no teammate, no building
     w = g._initial_guess(x0, 0.0, tgt, [])
-    gv = np.asarray(g._g_fun(w, par)).reshape(g.config.horizon, -1)[:, 5:]
+    gv = g._g_fun(x=w, p=par)["g"].reshape(g.config.horizon, -1)[:, 5:]
     np.testing.assert_allclose(gv, 1.0)
     np.testing.assert_allclose(g._feasible_slacks(w, par), 0.0)
 

@@ -130,7 +130,7 @@ class MetricsTracker:
                          solve_ms_p50=s.get("solve_ms_p50"), solve_ms_p95=s.get("solve_ms_p95"))
                 if "escalations" in s:  # tiered solvers: hand-offs from the fast tier to the robust one
                     m["solver_escalations"] = s["escalations"]
-                if s.get("restart_probes"):  # NMPC restart probes: re-solves from the vector-field guess, and kept
+                if "restart_probes" in s:  # NMPC restart probes: re-solves from the vector-field guess, and kept
                     m["solver_restart_probes"], m["solver_restarts"] = s["restart_probes"], s["restarts"]
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))

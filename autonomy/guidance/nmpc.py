@@ -387,6 +387,7 @@ class NmpcStandoffGuidance(Guidance):
         x0 = self._initial_state(own, t)
         par = self._parameters(x0, own, target, teammates, t)
         ok, t_solve, status = False, 0.0, "injected failure"
+        before = self._plan_state()
         if self._inject > 0:
             self._inject -= 1
         else:
@@ -403,8 +404,9 @@ class NmpcStandoffGuidance(Guidance):
         self.stats.last_status = status
         if t_solve > c.time_budget_s:
             self.stats.overruns += 1
-            if c.enforce_time_budget:
+            if c.enforce_time_budget and ok:  # too late to be used: the fallback works from the previous plan
                 ok = False
+                self._set_plan_state(before)
         if ok:
             self._plan_t = t
             u = self._plan_u[0]
@@ -589,15 +591,22 @@ class NmpcStandoffGuidance(Guidance):
         """Solve again from the vector-field guess (with the fast solver) and keep whichever plan costs less; the
         solve's wall time (s)."""
         self.stats.restart_probes += 1
-        keep = (self._w0, self._lam_g0, self._lam_x0, self._plan_x, self._plan_u, self._plan_t)
+        keep = self._plan_state()
         j_warm = self._cost(self._w0, par)
         ok, t_probe, _ = self._solve(x0, par, t, target, teammates, fresh=True)
         if ok and self._cost(self._w0, par) < j_warm - 1e-9 * abs(j_warm):
             self.stats.restarts += 1
         else:  # the warm plan stays; probe again only after the configured interval
-            self._w0, self._lam_g0, self._lam_x0, self._plan_x, self._plan_u, self._plan_t = keep
+            self._set_plan_state(keep)
             self._next_probe_t = t + self.config.restart_probe_interval_s
         return t_probe
+
+    def _plan_state(self) -> tuple:
+        """The plan and warm-start state a solve replaces (see :meth:`_set_plan_state`)."""
+        return self._w0, self._lam_g0, self._lam_x0, self._plan_x, self._plan_u, self._plan_t
+
+    def _set_plan_state(self, state: tuple) -> None:
+        self._w0, self._lam_g0, self._lam_x0, self._plan_x, self._plan_u, self._plan_t = state
 
     def _cost(self, w: np.ndarray, par: np.ndarray) -> float:
         return float(self._f_fun(x=w, p=par)["f"][0])

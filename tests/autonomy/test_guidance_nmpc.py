@@ -258,3 +258,19 @@ def test_restart_probe_keeps_the_cheaper_plan():
         else:
             assert np.mean(g._plan_u[:, 0] <= g.config.speed_bounds[0] + 1e-3) >= 0.5 and g.stats.restart_probes == 0
     assert costs[True] < costs[False] - 1e-3 * abs(costs[False])
+
+
+def test_an_enforced_overrun_falls_back_to_the_previous_plan():
+    """A solve that finishes after the time budget is not used, and the fallback shifts the plan of the last
+    solve that was (not the late one, which would be stamped with the old time)."""
+    import dataclasses
+
+    g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD), 0)
+    g.command(*_states(0.0), 0.0)
+    first_u, first_x = g._plan_u.copy(), g._plan_x.copy()
+    g.config = dataclasses.replace(g.config, time_budget_s=1e-9, enforce_time_budget=True)
+    sp = g.command(*_states(0.5), 0.5)
+    assert g.stats.overruns == 1 and g.stats.failures == 1 and g.stats.fallbacks_shifted == 1
+    np.testing.assert_allclose([sp.speed, sp.heading_rate], first_u[1])
+    np.testing.assert_array_equal(g._plan_x, first_x) and np.testing.assert_array_equal(g._plan_u, first_u)
+    assert g._plan_t == 0.0

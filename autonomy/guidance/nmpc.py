@@ -114,6 +114,9 @@ from autonomy.guidance.base import Guidance, GuidanceStats
 from autonomy.guidance.codegen import BufferedCall, compiled_nlpsol
 from autonomy.guidance.keepout import nearby_keepouts
 from autonomy.guidance.nmpc_config import NmpcConfig
+from autonomy.guidance.nmpc_problem import NX as _NX
+from autonomy.guidance.nmpc_problem import NU as _NU
+from autonomy.guidance.nmpc_problem import build_problem
 from autonomy.guidance.setpoints import UnicycleSetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.vector_field import VectorFieldGuidance
@@ -121,32 +124,9 @@ from worlds.geometry import Building
 
 __all__ = ["NmpcStandoffGuidance", "NmpcStats"]
 
-_NX, _NU = 5, 2
-_TM_PAR = 3  # active, cos φ, sin φ (+ 2N positions)
-_B_PAR = 7  # active, cx, cy, cos yaw, sin yaw, 1/α, 1/β
 # names CasADi expects of a hess_lag function (checked when the solver loads it from a compiled library)
 _HESS_IO = (["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
 _ACCEPT_VIOLATION = 1e-3  # largest constraint violation of an iterate accepted after the iteration cap (m, −)
-
-
-def _rk4(c: NmpcConfig) -> ca.Function:
-    """Discrete prediction model x_{k+1} = f_d(x_k, u_k) of the lagged unicycle (RK4, ``c.substeps`` substeps)."""
-    x, u = ca.SX.sym("x", _NX), ca.SX.sym("u", _NU)
-
-    def rhs(z: ca.SX) -> ca.SX:
-        dv = (u[0] - z[3]) / c.model.tau_v if c.model.tau_v > 0 else 0
-        dw = (u[1] - z[4]) / c.model.tau_omega if c.model.tau_omega > 0 else 0
-        return ca.vertcat(z[3] * ca.cos(z[2]), z[3] * ca.sin(z[2]), z[4], dv, dw)
-
-    z = ca.vertcat(x[0], x[1], x[2], u[0] if c.model.tau_v == 0 else x[3], u[1] if c.model.tau_omega == 0 else x[4])
-    h = c.dt / c.substeps
-    for _ in range(c.substeps):
-        k1 = rhs(z)
-        k2 = rhs(z + h / 2 * k1)
-        k3 = rhs(z + h / 2 * k2)
-        k4 = rhs(z + h * k3)
-        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("f_d", [x, u], [z])
 
 
 @dataclass(kw_only=True)
@@ -220,82 +200,19 @@ class NmpcStandoffGuidance(Guidance):
 
     # ------------------------------------------------------------------ construction
     def _build(self) -> None:
-        c, w = self.config, self.config.weights
-        n, m, nb = c.horizon, self._n_tm, self._n_bld
-        f_d = _rk4(c)
-        self._f_d = f_d
-        n_par = _NX + 4 + m * (_TM_PAR + 2 * n) + nb * _B_PAR
-        P = ca.SX.sym("p", n_par)
-        X = ca.SX.sym("X", _NX, n)
-        U = ca.SX.sym("U", _NU, n)
-        S = ca.SX.sym("S", n)
-        x0, pt0, vt = P[0:_NX], P[_NX:_NX + 2], P[_NX + 2:_NX + 4]
-        off = _NX + 4
-        tms = []
-        for _ in range(m):
-            tms.append((P[off], P[off + 1], P[off + 2], ca.reshape(P[off + 3:off + 3 + 2 * n], 2, n)))
-            off += _TM_PAR + 2 * n
-        bls = [P[off + i * _B_PAR: off + (i + 1) * _B_PAR] for i in range(nb)]
-        kappa = self._slack_scale
-        Sk = S / kappa  # the slack in constraint units; the decision variable is kappa times it (see _slack_scale)
-        rd2 = c.standoff_radius ** 2
-        vmax, wmax = c.speed_deviation, c.max_heading_rate
-        w_nom = c.direction * c.nominal_speed / c.standoff_radius
-        res, lin, g = [], 0, []  # cost = ½|res|² + lin (least squares, for the Gauss-Newton Hessian)
-        xk = x0
-        for k in range(n):
-            xn = f_d(xk, U[:, k])
-            g.append(X[:, k] - xn)
-            xk = X[:, k]
-            res += [np.sqrt(w.r_v) * (U[0, k] - c.nominal_speed) / vmax, np.sqrt(w.r_omega) * (U[1, k] - w_nom) / wmax]
-            p = X[0:2, k]
-            pt = pt0 + vt * (k + 1) * c.dt
-            r = p - pt
-            rr = ca.sumsqr(r)
-            rt = (rd2 - rr) / rd2
-            qr, qd = (w.p_r, w.p_d) if k == n - 1 else (w.q_r, w.q_d)
-            res.append(np.sqrt(qr) * rt)
-            if m > 0:
-                u_me = r / ca.sqrt(rr + 1.0)
-                n_act = sum(tm[0] for tm in tms)
-                scale = np.sqrt(qd) / ca.sqrt(ca.fmax(n_act, 1))
-                for act, cph, sph, Q in tms:
-                    rj = Q[:, k] - pt
-                    if c.phase_cost == "paper":
-                        dt_ = (ca.dot(r, rj) + ca.sqrt(rr + 1e-6) * ca.sqrt(ca.sumsqr(rj) + 1e-6)) / rd2
-                        res.append(scale * act * dt_)
-                    else:
-                        uj = rj / ca.sqrt(ca.sumsqr(rj) + 1.0)
-                        ujr = ca.vertcat(cph * uj[0] - sph * uj[1], sph * uj[0] + cph * uj[1])
-                        res += [scale * act * (u_me[0] - ujr[0]), scale * act * (u_me[1] - ujr[1])]
-                    g.append(act * (ca.sumsqr(p - Q[:, k]) / c.separation_distance ** 2 - 1) + (1 - act) + Sk[k])
-            for bp in bls:
-                d = p - bp[1:3]
-                lx = (bp[3] * d[0] + bp[4] * d[1]) * bp[5]
-                ly = (-bp[4] * d[0] + bp[3] * d[1]) * bp[6]
-                g.append(bp[0] * (lx ** 2 + ly ** 2 - 1) + (1 - bp[0]) + Sk[k])
-            res.append(np.sqrt(2 * w.slack_l2) * Sk[k])
-            lin += w.slack_l1 * Sk[k]
-        wvar = ca.vertcat(ca.vec(X), ca.vec(U), S)
-        R = ca.vertcat(*res)
-        J = 0.5 * ca.sumsqr(R) + lin
-        # Gauss-Newton Hessian of the Lagrangian: σ J_Rᵀ J_R (+ a small regulariser), constraint curvature ignored
-        lam_f = ca.SX.sym("lam_f")
-        JR = ca.jacobian(R, wvar)
-        H_gn = lam_f * (ca.mtimes(JR.T, JR) + 1e-6 * ca.SX.eye(wvar.shape[0]))
-        self._n_eq = _NX * n
-        g_all = ca.vertcat(*g)
-        self._n_g = int(g_all.shape[0])
-        lam_g = ca.SX.sym("lam_g", self._n_g)
-        nlp = {"x": wvar, "p": P, "f": J, "g": g_all}
-        self._g_fun = BufferedCall(ca.Function("g", [wvar, P], [g_all], ["x", "p"], ["g"]))
-        self._f_fun = BufferedCall(ca.Function("f", [wvar, P], [J], ["x", "p"], ["f"]))
+        c = self.config
+        pb = build_problem(c, self._n_tm, self._n_bld, self._slack_scale)
+        self._f_d, self._n_g, self._n_par = pb.f_d, pb.n_g, pb.n_par
+        self._lbx, self._ubx, self._lbg, self._ubg = pb.lbx, pb.ubx, pb.lbg, pb.ubg
+        nlp, wvar, P, lam_f, lam_g, H_gn = pb.nlp, pb.nlp["x"], pb.nlp["p"], pb.lam_f, pb.lam_g, pb.H_gn
+        self._g_fun = BufferedCall(ca.Function("g", [wvar, P], [pb.nlp["g"]], ["x", "p"], ["g"]))
+        self._f_fun = BufferedCall(ca.Function("f", [wvar, P], [pb.nlp["f"]], ["x", "p"], ["f"]))
         if c.solver == "ipopt":  # IPOPT takes the upper triangle
             hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [ca.triu(H_gn)], *_HESS_IO)
             self._solver = BufferedCall(ca.nlpsol("nmpc", *self._solver_spec(nlp, hess, "gauss_newton")))
             self._curv_solver = None
         else:
-            H_cc = H_gn + ca.hessian(ca.dot(lam_g, g_all), wvar)[0]
+            H_cc = pb.curvature_hessian()
             first = "gauss_newton" if c.hessian == "tiered" else c.hessian
             H_first = H_gn if first == "gauss_newton" else H_cc
             hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [H_first], *_HESS_IO)
@@ -307,20 +224,6 @@ class NmpcStandoffGuidance(Guidance):
         cold_opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-6,
                      "ipopt.max_iter": c.cold_start_max_iter}
         self._cold_solver = BufferedCall(ca.nlpsol("nmpc_cold", "ipopt", nlp, cold_opts))
-        lo, hi = c.speed_bounds
-        inf = np.inf
-        lbx = np.concatenate([np.full(_NX * n, -inf), np.tile([lo, -wmax], n), np.zeros(n)])
-        ubx = np.concatenate([np.full(_NX * n, inf), np.tile([hi, wmax], n), np.full(n, inf)])
-        self._lbx, self._ubx = lbx, ubx
-        self._lbg = np.zeros(self._n_g)
-        # the equality rows are interleaved per step: mark them by structure
-        eq_mask = np.zeros(self._n_g, dtype=bool)
-        row = 0
-        for _ in range(n):
-            eq_mask[row:row + _NX] = True
-            row += _NX + m + nb
-        self._ubg = np.where(eq_mask, 0.0, inf)
-        self._n_par = n_par
 
     def _nlpsol(self, name: str, plugin: str, nlp: dict, opts: dict) -> BufferedCall:
         """The fast solver ``name``: compiled (:mod:`autonomy.guidance.codegen`) when ``config.compiled``."""

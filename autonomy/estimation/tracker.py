@@ -285,10 +285,7 @@ class SingleTargetTracker:
         if self.config.filter != "scif":
             raise TypeError(f"step_information needs the information filter (scif), not {self.config.filter!r}")
         contribution = self._absorb(detections, defer_at=t)
-        if self.filter is None:
-            return None
-        if t - self.last_update_t > self.config.lost_after_s:
-            self.filter = None
+        if not self._still_tracked(t):
             return None
         if contribution is None and t > self.filter.t:
             self.filter.predict(t)
@@ -352,14 +349,17 @@ class SingleTargetTracker:
 
     def estimate(self, t: float) -> TargetEstimate | None:
         """The track's estimate predicted to ``t`` (s), or None without a track (dropping it if lost by ``t``)."""
-        if self.filter is None:
-            return None
-        if t - self.last_update_t > self.config.lost_after_s:
-            self.filter = None
+        if not self._still_tracked(t):
             return None
         if t > self.filter.t:
             self.filter.predict(t)
         return self.current_estimate()
+
+    def _still_tracked(self, t: float) -> bool:
+        """Whether a track remains at ``t`` (s): one that has gone ``lost_after_s`` without an update is dropped."""
+        if self.filter is not None and t - self.last_update_t > self.config.lost_after_s:
+            self.filter = None
+        return self.filter is not None
 
     def current_estimate(self) -> TargetEstimate | None:
         """The track's estimate at its filter's own time, without the loss check or prediction of :meth:`estimate`

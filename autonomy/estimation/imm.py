@@ -28,7 +28,7 @@ import numpy as np
 from autonomy.estimation.base import TIME_TOLERANCE, Filter, GaussianFilter, Innovation
 from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, measurement_model
 
-__all__ = ["IMM"]
+__all__ = ["IMM", "cv_ct_imm", "switching_matrix"]
 
 
 class IMM(Filter):
@@ -203,3 +203,30 @@ class IMM(Filter):
             self.mu = np.array([v / total for v in w])
         self.last_innovations = innovations
         return innovations[int(np.argmax(self.mu))]
+
+
+def switching_matrix(n_modes: int, p_stay: float) -> np.ndarray:
+    """Mode-transition matrix with ``p_stay`` on the diagonal and the rest spread evenly over the other modes."""
+    if not 0.0 < p_stay < 1.0:
+        raise ValueError(f"p_stay must be in (0, 1), got {p_stay}")
+    off = (1.0 - p_stay) / (n_modes - 1) if n_modes > 1 else 0.0
+    return np.full((n_modes, n_modes), off) + np.eye(n_modes) * (p_stay - off)
+
+
+def cv_ct_imm(x0: np.ndarray, P0: np.ndarray, t0: float, *, q_cv: float, q_ct: float, turn_rate: float,
+              p_stay: float, kind: str = "ekf", target_height: float = 0.0) -> IMM:
+    """Paper 003's IMM: three filters of type ``kind`` on the CV model and the coordinated turns at ``±turn_rate``
+    (rad/s), all on the layout ``(x, vx, y, vy)``, from ``(x0, P0)`` at ``t0`` (s).
+
+    ``q_cv``, ``q_ct``: white-acceleration spectral densities of the CV and CT models (m²/s³); ``p_stay``: diagonal of
+    the transition matrix (:func:`switching_matrix`); ``target_height``: the ground plane of the measurement models (m).
+    """
+    from autonomy.estimation.factory import make_filter
+    from autonomy.estimation.models import ConstantVelocity, CoordinatedTurn
+
+    if not turn_rate > 0:
+        raise ValueError(f"turn_rate must be > 0 rad/s, got {turn_rate}")
+    models = [ConstantVelocity(q=q_cv), CoordinatedTurn(omega=turn_rate, q=q_ct),
+              CoordinatedTurn(omega=-turn_rate, q=q_ct)]
+    filters = [make_filter(kind, m, x0, P0, t0, target_height=target_height) for m in models]
+    return IMM(filters, switching_matrix(len(models), p_stay))

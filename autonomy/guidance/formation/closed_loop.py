@@ -10,9 +10,9 @@ Each step of ``dt`` seconds
 3. the team decides around the IMM's estimate: Algorithm 1 plus the Jacobi PD law
    (:func:`~autonomy.guidance.formation.guidance.formation_step`); the baselines use the same PD law towards a geometry
    that is not optimised: ``formation="fixed"`` holds the start geometry translated with the estimate, and
-   ``formation="trail"`` flies the agents in a narrow fan behind the target (bearings ±``trail_fan`` around the
-   direction opposite to its velocity, at the agents' mean start range), a natural follow-the-car formation whose
-   nearly parallel bearing lines are the poor geometry Algorithm 1 avoids;
+   ``formation="trail"`` flies the agents in a narrow fan behind the target (the formation law's ``geometry="trail"``:
+   bearings ±``trail_fan`` around the direction opposite to its velocity, at the agents' mean start range), a natural
+   follow-the-car formation whose nearly parallel bearing lines are the poor geometry Algorithm 1 avoids;
 4. each agent flies its commanded velocity for one step (a velocity-tracking plant, as
    :class:`~autonomy.guidance.formation.guidance.FormationGuidance` assumes).
 
@@ -23,15 +23,13 @@ so it is known), with a 30 m / 5 m/s standard deviation.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
 
-from autonomy.estimation.factory import make_filter
-from autonomy.estimation.imm import IMM
+from autonomy.estimation.imm import IMM, cv_ct_imm
 from autonomy.estimation.measurements import Measurement, StackedMeasurement
-from autonomy.estimation.models import ConstantVelocity, CoordinatedTurn
 from autonomy.guidance.formation.guidance import FormationConfig, formation_step
 from autonomy.guidance.formation.jacobi import jacobi_pd_acceleration
 from autonomy.guidance.types import TargetEstimate
@@ -184,11 +182,7 @@ def _triangulate(p_agents: np.ndarray, bearings: np.ndarray) -> np.ndarray:
 
 
 def _imm(cfg: FormationLoopConfig, x0: np.ndarray, P0: np.ndarray, t0: float) -> IMM:
-    models = [ConstantVelocity(q=cfg.q_cv), CoordinatedTurn(omega=cfg.turn_rate, q=cfg.q_ct),
-              CoordinatedTurn(omega=-cfg.turn_rate, q=cfg.q_ct)]
-    off = (1.0 - cfg.p_stay) / 2.0
-    Pi = np.full((3, 3), off) + np.eye(3) * (cfg.p_stay - off)
-    return IMM([make_filter("ekf", m, x0, P0, t0) for m in models], Pi)
+    return cv_ct_imm(x0, P0, t0, q_cv=cfg.q_cv, q_ct=cfg.q_ct, turn_rate=cfg.turn_rate, p_stay=cfg.p_stay)
 
 
 def run_formation_loop(cfg: FormationLoopConfig, rng: np.random.Generator) -> FormationLoopResult:
@@ -201,7 +195,8 @@ def run_formation_loop(cfg: FormationLoopConfig, rng: np.random.Generator) -> Fo
     v = np.tile(np.array(cfg.target_v0, dtype=float), (n, 1))
     offsets = p - np.array(cfg.target_p0)  # the fixed formation's geometry
     trail_range = float(np.mean(np.linalg.norm(offsets, axis=1)))
-    fan = np.linspace(-cfg.trail_fan, cfg.trail_fan, n)
+    guidance = cfg.guidance if cfg.formation != "trail" else replace(
+        cfg.guidance, geometry="trail", ranges=(trail_range,) * n, trail_fan=cfg.trail_fan)
     sig = cfg.sigma_bearing
     imm: IMM | None = None
     rows = {k: [] for k in ("t", "x", "err", "mu", "p", "ld", "ldmax")}
@@ -228,15 +223,11 @@ def run_formation_loop(cfg: FormationLoopConfig, rng: np.random.Generator) -> Fo
             rows[key].append(val)
         # the team decides around the estimate and flies one step
         est = TargetEstimate(t=t, p_W=np.array([x[0], x[2]]), v_W=np.array([x[1], x[3]]))
-        if cfg.formation == "optimal":
-            v_cmd = formation_step(p, v, est, cfg.guidance).v_cmd_W
+        if cfg.formation != "fixed":
+            v_cmd = formation_step(p, v, est, guidance).v_cmd_W
         else:
             g = cfg.guidance
-            if cfg.formation == "fixed":
-                p_d = est.p_W + offsets
-            else:
-                back = np.arctan2(est.v_W[1], est.v_W[0]) + np.pi + fan
-                p_d = est.p_W + trail_range * np.c_[np.cos(back), np.sin(back)]
+            p_d = est.p_W + offsets
             a = jacobi_pd_acceleration(p, v, p_d, np.broadcast_to(est.v_W, p.shape), g.gains)
             v_cmd = v + a * g.dt
             speed = np.linalg.norm(v_cmd, axis=1, keepdims=True)

@@ -8,12 +8,18 @@ The paper's agents are double integrators. A quadrotor's velocity controller is 
 
 which for a velocity-tracking plant is the Euler step of p̈_i = a_i. Altitude is held by ``v_z = k_z (z_d − z)``.
 The decision is the same in every agent (same inputs, deterministic), so the team needs no central planner.
+
+``geometry="trail"`` replaces Algorithm 1 by a geometry that is not optimised, as a baseline: the agents fly a narrow
+fan behind the target, bearings ``±trail_fan`` around the direction opposite to its velocity (agent i at the i-th of N
+evenly spaced angles), at the desired ranges (the mean current range when ``ranges`` is None). Its nearly parallel
+bearing lines are the poor geometry Algorithm 1 avoids; the PD law and limits are the same.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -22,8 +28,9 @@ from autonomy.guidance.formation.geometry import OptimalFormation, optimal_forma
 from autonomy.guidance.formation.jacobi import JacobiGains, jacobi_pd_acceleration
 from autonomy.guidance.setpoints import VelocitySetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from autonomy.metrics.fim import bearing_fim_from_directions, max_det_bearing_fim
 
-__all__ = ["FormationConfig", "FormationStep", "FormationGuidance", "formation_step"]
+__all__ = ["FormationConfig", "FormationStep", "FormationGuidance", "formation_step", "trail_formation"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -53,6 +60,10 @@ class FormationConfig:
         Altitude held (m).
     altitude_gain : float
         k_z of the altitude hold (1/s), >= 0.
+    geometry : {"optimal", "trail"}
+        Algorithm 1's det F-optimal geometry, or the trailing fan of the module docstring (a baseline).
+    trail_fan : float
+        Half-angle of the trailing fan (rad), in (0, π/2]; only with ``geometry="trail"``.
     """
 
     team_size: int = 3
@@ -65,8 +76,14 @@ class FormationConfig:
     n_rotations: int = 72
     altitude: float = 60.0
     altitude_gain: float = 1.0
+    geometry: Literal["optimal", "trail"] = "optimal"
+    trail_fan: float = float(np.deg2rad(15.0))
 
     def __post_init__(self) -> None:
+        if self.geometry not in ("optimal", "trail"):
+            raise ValueError(f"FormationConfig.geometry must be 'optimal' or 'trail', got {self.geometry!r}")
+        if not (np.isfinite(self.trail_fan) and 0 < self.trail_fan <= np.pi / 2):
+            raise ValueError(f"FormationConfig.trail_fan must be in (0, π/2] rad, got {self.trail_fan}")
         if int(self.team_size) != self.team_size or self.team_size < 2:
             raise ValueError(f"FormationConfig.team_size must be an integer >= 2, got {self.team_size}")
         if self.ranges is not None:
@@ -114,14 +131,30 @@ def formation_step(p_W: np.ndarray, v_W: np.ndarray, target: TargetEstimate, con
         raise ValueError(f"expected ({config.team_size}, 2) positions and velocities, got {p.shape} and {v.shape}")
     p_t, v_t = target.p_W[:2], target.v_W[:2]
     ranges = np.linalg.norm(p - p_t, axis=1) if config.ranges is None else np.asarray(config.ranges)
-    geo = optimal_formation(p_t, v_t, p, np.maximum(ranges, 1e-6), config.sigma_bearing,
-                            backward_weight=config.backward_weight, n_rotations=config.n_rotations)
+    if config.geometry == "trail":
+        geo = trail_formation(p_t, v_t, ranges if config.ranges is not None else np.full(len(p), ranges.mean()),
+                              config.trail_fan, config.sigma_bearing)
+    else:
+        geo = optimal_formation(p_t, v_t, p, np.maximum(ranges, 1e-6), config.sigma_bearing,
+                                backward_weight=config.backward_weight, n_rotations=config.n_rotations)
     v_d = np.broadcast_to(v_t, p.shape)
     a = jacobi_pd_acceleration(p, v, geo.p_W, v_d, config.gains, a_target_W)
     v_cmd = v + a * config.dt
     speed = np.linalg.norm(v_cmd, axis=1, keepdims=True)
     v_cmd = np.where(speed > config.max_speed, v_cmd * (config.max_speed / np.maximum(speed, 1e-12)), v_cmd)
     return FormationStep(geometry=geo, a_W=a, v_cmd_W=v_cmd)
+
+
+def trail_formation(p_t: np.ndarray, v_t: np.ndarray, ranges: np.ndarray, fan: float,
+                    sigma_bearing: float) -> OptimalFormation:
+    """The trailing fan of the module docstring around a target at ``p_t`` (m) moving with ``v_t`` (m/s): agent i at
+    range ``ranges[i]`` (m), direction ``atan2(v_t) + π + linspace(−fan, fan, N)[i]`` (rad)."""
+    r = np.asarray(ranges, dtype=float)
+    theta = np.arctan2(v_t[1], v_t[0]) + np.pi + np.linspace(-fan, fan, r.size)
+    p_d = p_t + r[:, None] * np.c_[np.cos(theta), np.sin(theta)]
+    c2 = 1.0 / (sigma_bearing * np.maximum(r, 1e-6)) ** 2
+    return OptimalFormation(theta=theta, p_W=p_d, ranges=r, det_fim=float(np.linalg.det(
+        bearing_fim_from_directions(c2, theta))), det_bound=max_det_bearing_fim(c2), cost=0.0)
 
 
 class FormationGuidance(Guidance):

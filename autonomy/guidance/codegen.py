@@ -4,9 +4,10 @@ CasADi evaluates its symbolic functions in a virtual machine; for the NMPC's SQP
 evaluations are a third of a solve. :func:`compiled_nlpsol` builds the solver as usual, writes the C code of the
 functions it calls (what ``generate_dependencies`` writes: ``nlp_fg``, ``nlp_jac_fg``, ``nlp_grad``, ``nlp_hess_l``, the
 last the user's ``hess_lag`` when given), compiles them into a shared library and returns the same solver loading its
-functions from that library. The library is cached under a key of the C source, the CasADi version, the compiler and its
-flags: the first construction of a problem on a machine pays the compiler (a few seconds at ``-O1``), later ones — other
-runs, campaign workers, test processes — load it in milliseconds. Writers compile into a private temporary file and
+functions from that library. The library is cached under a key of the serialized problem and options, the CasADi
+version, the machine, the compiler and its flags: the first construction of a problem on a machine pays the compiler
+(a few seconds at ``-O1``), later ones — other runs, campaign workers, test processes — load it in milliseconds without
+building the uncompiled solver first. Writers compile into a private temporary file and
 publish it with an atomic rename, so concurrent processes never see a half-written library.
 
 :class:`BufferedCall` calls a CasADi function on numpy arrays through ``Function.buffer`` (zero copy): the usual
@@ -37,6 +38,7 @@ __all__ = ["BufferedCall", "cache_dir", "compiled_nlpsol"]
 
 _LOG = logging.getLogger(__name__)
 _FLAGS = ("-O1", "-fPIC", "-shared")
+_KEY_FORMAT = "skytrack-nlpsol-2"  # bump when the key or the generated files change meaning
 _warned: set[str] = set()
 
 
@@ -65,25 +67,46 @@ def compiled_nlpsol(name: str, plugin: str, nlp: dict, opts: dict) -> tuple[ca.F
     compiled : bool
         Whether the compiled library is used.
     """
-    solver = ca.nlpsol(name, plugin, nlp, opts)
     compiler = shlex.split(os.environ.get("CC", "cc"))
     if not compiler or shutil.which(compiler[0]) is None:
         _warn_once(f"no C compiler ({' '.join(compiler) or 'CC empty'}): CasADi solvers run uncompiled (slower)")
-        return solver, False
+        return ca.nlpsol(name, plugin, nlp, opts), False
+    # the library holds nlp_hess_l already (the user's hess_lag when one was given)
+    lib_opts = {k: v for k, v in opts.items() if k not in ("hess_lag", "jac_fg")}
+    lib = cache_dir() / f"{name}_{_problem_key(plugin, nlp, opts, compiler)}.so"
+    if lib.exists():  # cached: the virtual-machine solver is never built
+        return ca.nlpsol(name, plugin, str(lib), lib_opts), True
+    solver = ca.nlpsol(name, plugin, nlp, opts)
     try:
-        lib = _library(solver, name, compiler)
-        # the library holds nlp_hess_l already (the user's hess_lag when one was given)
-        lib_opts = {k: v for k, v in opts.items() if k not in ("hess_lag", "jac_fg")}
+        _compile(solver, name, compiler, lib)
         return ca.nlpsol(name, plugin, str(lib), lib_opts), True
     except (OSError, RuntimeError, subprocess.SubprocessError) as exc:
         _warn_once(f"compiling the CasADi solver {name!r} failed, it runs uncompiled (slower): {exc}")
         return solver, False
 
 
-def _library(solver: ca.Function, name: str, compiler: list[str]) -> Path:
-    """Path of the compiled library of ``solver``'s functions, compiling it when it is not cached (a cache that is
-    read-only but holds the library is used as it is)."""
-    root = cache_dir()
+def _problem_key(plugin: str, nlp: dict, opts: dict, compiler: list[str]) -> str:
+    """Cache key of a solver's library: the serialized problem (x, p -> f, g), the options (functions among them
+    serialized), the CasADi version, the machine and the compiler with its flags. ``nlpsol`` derives the functions it
+    calls deterministically from these, so equal keys mean equal C; serializing is ≈ 10× cheaper than generating the
+    C, and a cached solver is loaded without building its virtual-machine twin first."""
+
+    def text(v: object) -> str:
+        if isinstance(v, ca.Function):
+            return v.serialize()
+        if isinstance(v, dict):
+            return "{" + ",".join(f"{k!r}:{text(v[k])}" for k in sorted(v)) + "}"
+        return repr(v)
+
+    args = [nlp["x"]] + ([nlp["p"]] if "p" in nlp else [])
+    problem = ca.Function("nlp", args, [nlp.get("f", 0), nlp.get("g", ca.DM.zeros(0, 1))])
+    parts = [_KEY_FORMAT, plugin, problem.serialize(), text(opts), ca.__version__, platform.machine(),
+             " ".join(compiler + list(_FLAGS))]
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()[:20]
+
+
+def _compile(solver: ca.Function, name: str, compiler: list[str], lib: Path) -> None:
+    """Write the C of ``solver``'s functions, compile it and publish it as ``lib`` (atomic rename)."""
     with tempfile.TemporaryDirectory() as tmp:
         # what solver.generate_dependencies writes, but into our own directory (it takes a bare file name only)
         gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
@@ -91,21 +114,15 @@ def _library(solver: ca.Function, name: str, compiler: list[str]) -> Path:
         for fname in solver.get_function():
             gen.add(solver.get_function(fname))
         src = Path(gen.generate(f"{tmp}{os.sep}"))
-        key = hashlib.sha256(b"\0".join([src.read_bytes(), ca.__version__.encode(), platform.machine().encode(),
-                                         " ".join(compiler + list(_FLAGS)).encode()]))
-        lib = root / f"{name}_{key.hexdigest()[:20]}.so"
-        if lib.exists():
-            return lib
         out = Path(tmp) / lib.name
         proc = subprocess.run([*compiler, *_FLAGS, str(src), "-o", str(out)], capture_output=True, text=True,
                               check=False)
         if proc.returncode != 0:
             raise RuntimeError(f"{' '.join(compiler)} exited with {proc.returncode}: {proc.stderr.strip()[:500]}")
-        root.mkdir(parents=True, exist_ok=True)
-        staged = Path(tempfile.mkstemp(dir=root, prefix=".tmp-", suffix=".so")[1])
+        lib.parent.mkdir(parents=True, exist_ok=True)
+        staged = Path(tempfile.mkstemp(dir=lib.parent, prefix=".tmp-", suffix=".so")[1])
         shutil.copyfile(out, staged)
         os.replace(staged, lib)  # atomic: a concurrent reader sees no library or a whole one
-    return lib
 
 
 class BufferedCall:

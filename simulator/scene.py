@@ -81,6 +81,12 @@ class SceneConfig:
         one car in road_standoff cost 307 us per step); 1 mm keeps about one point per wheel and leaves the car's
         trajectory unchanged to the millimetre over 10 s (122-159 us per step). Contacts are still found at Bullet's
         collision margins.
+    solver_iterations : int
+        Iterations of Bullet's constraint solver per step, >= 1 (PyBullet's default is 50). The joints, motors and wheel
+        contacts of the cars are its rows; 10 iterations halve a car's step (sedan at 240 Hz: 72 against 142 us) and
+        leave its motion converged: driven open-loop at 10 m/s on a steady turn, speed and yaw rate equal to 4 digits
+        and the path 0.14 m from the 50-iteration path after 100 m (it keeps its lane, stops and car-following
+        gaps: ``tests/vehicles`` run with this setting). Quadrotors have no joints and are unaffected.
     """
 
     physics_hz: int = 240
@@ -88,12 +94,15 @@ class SceneConfig:
     ground_size: tuple[float, float] = (2000.0, 2000.0)
     chunk: int = 256
     contact_breaking_threshold: float = 0.001
+    solver_iterations: int = 10
 
     def __post_init__(self) -> None:
         if self.physics_hz <= 0:
             raise ValueError(f"SceneConfig.physics_hz must be > 0, got {self.physics_hz}")
         if self.chunk < 1:
             raise ValueError(f"SceneConfig.chunk must be >= 1, got {self.chunk}")
+        if int(self.solver_iterations) != self.solver_iterations or self.solver_iterations < 1:
+            raise ValueError(f"SceneConfig.solver_iterations must be an integer >= 1, got {self.solver_iterations}")
         if not self.contact_breaking_threshold > 0:
             raise ValueError(f"SceneConfig.contact_breaking_threshold must be > 0 m, got "
                              f"{self.contact_breaking_threshold}")
@@ -117,6 +126,7 @@ class Scene:
         p.setPhysicsEngineParameter(fixedTimeStep=1.0 / config.physics_hz, numSubSteps=0,
                                     deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=config.contact_breaking_threshold,  # before any body
+                                    numSolverIterations=int(config.solver_iterations),
                                     physicsClientId=client)
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=client)
         sx, sy = config.ground_size

@@ -209,7 +209,7 @@ def run_kinematic_multi(network, params: CarParams, configs: list[DriverConfig],
 
 def bullet_client(physics_hz: int = 240) -> int:
     """A DIRECT PyBullet client with gravity, a fixed time step 1 / physics_hz, the scene's contact breaking threshold
-    and a ground plane (friction 1)."""
+    and constraint-solver iterations, and a ground plane (friction 1)."""
     import pybullet as p
 
     from simulator.scene import SceneConfig
@@ -218,7 +218,9 @@ def bullet_client(physics_hz: int = 240) -> int:
     p.setGravity(0, 0, -9.81, physicsClientId=c)
     p.setTimeStep(1.0 / physics_hz, physicsClientId=c)
     # the simulator's contact settings, so these tests check the car the runs drive
-    p.setPhysicsEngineParameter(contactBreakingThreshold=SceneConfig().contact_breaking_threshold, physicsClientId=c)
+    scene = SceneConfig()
+    p.setPhysicsEngineParameter(contactBreakingThreshold=scene.contact_breaking_threshold,
+                                numSolverIterations=scene.solver_iterations, physicsClientId=c)
     plane = p.createMultiBody(0, p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c), physicsClientId=c)
     p.changeDynamics(plane, -1, lateralFriction=1.0, physicsClientId=c)
     return c

@@ -9,6 +9,7 @@ steering reference follows the command at most ``max_steer_rate``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -70,11 +71,6 @@ class CarState:
     stopped: np.ndarray
 
 
-def _yaw(q: np.ndarray) -> np.ndarray:
-    x, y, z, w = q.T
-    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
 class CarFleet:
     """Cars, their drivers and their actuation.
 
@@ -127,10 +123,13 @@ class CarFleet:
                                      f"lengths {need:.2f} m; separate their Route.start_s")
 
     def _read(self) -> None:
-        x = np.array([b.state_row() for b in self.bodies])  # (n, 13): p_W, q_WB, v_W, omega_W
+        rows = [b.state_row() for b in self.bodies]  # per car: p_W, q_WB, v_W, omega_W
+        x = np.array(rows)
         self._p_W, self._q_WB, self._v_W, self._omega_z = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12]
-        self._yaw_arr = _yaw(self._q_WB)
-        self._speed = self._v_W[:, 0] * np.cos(self._yaw_arr) + self._v_W[:, 1] * np.sin(self._yaw_arr)
+        # heading and forward speed per car in scalar math: a handful of cars, read every physics tick
+        yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
+        self._yaw_arr = np.array(yaw)
+        self._speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
 
     def apply_actuation(self) -> None:
         """Run-loop phase 1: steering and wheel motor targets from the drivers' last commands."""

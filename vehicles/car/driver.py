@@ -224,13 +224,13 @@ class Driver:
         cfg, path = self.config, self.path
         reach = v * v / (2 * self.decel_plan) + cfg.lookahead_margin
         i1 = int(np.searchsorted(path.s, proj.s + reach, side="right"))
-        idx = np.arange(proj.index, max(i1, proj.index + 2))
-        idx = idx[idx < len(path.s)]
-        d = np.r_[0.0, path.s[idx[1:]] - proj.s]
-        cap = np.minimum(curve_speed(path.kappa[idx], cfg.lateral_accel_max),
-                         np.minimum(self.cruise_fraction * path.speed_limit[idx], self.params.max_speed))
+        ahead = slice(proj.index, min(max(i1, proj.index + 2), len(path.s)))  # path points from the car's segment on
+        d = path.s[ahead] - proj.s
+        d[0] = 0.0  # the car's own position
+        cap = np.minimum(curve_speed(path.kappa[ahead], cfg.lateral_accel_max),
+                         np.minimum(self.cruise_fraction * path.speed_limit[ahead], self.params.max_speed))
         if stop is not None and stop[0] - proj.s <= reach:
-            d, cap = np.r_[d, stop[0] - proj.s], np.r_[cap, 0.0]
+            d, cap = np.append(d, stop[0] - proj.s), np.append(cap, 0.0)
         a, _ = envelope_accel(v, d, cap, gain=cfg.speed_gain, decel_plan=self.decel_plan,
                               min_distance=max(2.0, 2 * v / cfg.rate_hz))
         if leader is not None:

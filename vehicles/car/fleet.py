@@ -167,7 +167,7 @@ class CarFleet:
     def _check_road(self, i: int, tick: int) -> None:
         """Events when a car's centre leaves the street (|lateral| > lanes x lane_width) or comes back."""
         drv = self.drivers[i]
-        road_id, s, lateral = drv.locate(self._p_W[i, :2])
+        road_id, s, lateral = drv.road_position()  # where the update just projected the car
         road = drv.network.roads[road_id]
         off = abs(lateral) > road.lanes * road.lane_width
         if off != self._off_road[i]:

@@ -177,7 +177,7 @@ class LanePath:
         a = self.xy[lo:hi]
         t = self._t[lo:hi]
         d = np.asarray(p_xy, dtype=float)[:2] - a
-        u = np.clip(np.einsum("ij,ij->i", d, t), 0.0, self._seg[lo:hi])
+        u = np.minimum(np.maximum(np.einsum("ij,ij->i", d, t), 0.0), self._seg[lo:hi])  # ufuncs: np.clip is slower
         r = d - u[:, None] * t
         i = int(np.argmin(np.einsum("ij,ij->i", r, r)))
         k = lo + i
@@ -188,8 +188,8 @@ class LanePath:
 
     def locate(self, s: float) -> tuple[int, float]:
         """(road index, arc length on that road's centre-line (m)) of path arc length ``s``."""
-        s = float(np.clip(s, 0.0, self.length))
-        k = int(np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, len(self.s) - 2))
+        s = min(max(float(s), 0.0), float(self.s[-1]))
+        k = min(max(int(np.searchsorted(self.s, s, side="right")) - 1, 0), len(self.s) - 2)
         frac = (s - self.s[k]) / max(self._seg[k], 1e-12)
         if self.road_index[k] != self.road_index[k + 1]:
             return int(self.road_index[k]), float(self.road_s[k])

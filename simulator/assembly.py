@@ -12,6 +12,7 @@ import pybullet as p
 from autonomy.agent import Agent
 from autonomy.estimation.tracker import SingleTargetTracker
 from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam
+from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
@@ -49,6 +50,7 @@ class AgentSlot:
     agent: Agent
     divisor: int
     hcmci: bool = False  # estimates as a member of the HCMCI consensus team
+    measurements: bool = False  # takes the teammates' detections (fusion method measurements)
 
 
 @dataclass
@@ -85,6 +87,7 @@ class Assembly:
     hcmci: HcmciTeam | None = None
     consensus_linked_steps: dict[int, int] = field(default_factory=dict)  # per UAV: team steps with a link up
     consensus_links: list[int] = field(default_factory=list)  # per team step: links up between nodes with a track
+    shared_received: dict[int, int] = field(default_factory=dict)  # per UAV: teammates' detections delivered to it
 
     # -- truth ---------------------------------------------------------------------------------------------------
     def target_truth(self) -> TargetTruth:
@@ -121,6 +124,8 @@ class Assembly:
             elif isinstance(msg, EstimateMessage):
                 n = msg.x.size // 2
                 shared[j] = TargetEstimate(t=msg.t_estimate, p_W=msg.x[:n], v_W=msg.x[n:], P=msg.P)
+            elif isinstance(msg, DetectionMessage):
+                self._deliver_detections(i, relayed(msg.detections, env.t_arrival - msg.t_sent))
         return [known[j] for j in sorted(known)], [shared[j] for j in sorted(shared)]
 
     def _share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int) -> None:
@@ -133,6 +138,30 @@ class Assembly:
         msg = EstimateMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, target_id=0,
                               x=np.concatenate([est.p_W, est.v_W]), P=est.P, t_estimate=est.t)
         self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
+
+    def _share_detections(self, i: int, detections: list, t: float, tick: int) -> None:
+        """Send UAV ``i``'s ``detections`` to the teammates that take them (fusion method measurements): over the radio
+        (loss and delay; they arrive in :meth:`inbox`), or under perfect comms at once to the teammates that
+        ``comms.links`` joins to ``i`` without an outage at ``tick``."""
+        takers = [a.uav for a in self.agents if a.measurements and a.uav != i]
+        if not detections or not takers:
+            return
+        if self.channel is None:
+            up = scheduled_links(self.uav_ids, self.world_spec.comms.links, self._outage_ticks, tick)
+            for j in takers:
+                if up[i, j]:
+                    self._deliver_detections(j, relayed(detections, 0.0))
+            return
+        st = self.quads.state
+        positions = {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}
+        for j in takers:
+            self.channel.send(DetectionMessage(sender=self.uav_ids[i], receiver=self.uav_ids[j], t_sent=t,
+                                               detections=tuple(detections)), positions, tick)
+
+    def _deliver_detections(self, j: int, detections: list) -> None:
+        if self.agents[j].measurements:
+            self.agents[j].agent.receive(detections)
+            self.shared_received[j] = self.shared_received.get(j, 0) + len(detections)
 
     def _broadcast_state(self, i: int, t: float, tick: int) -> None:
         st = self.quads.state
@@ -191,6 +220,7 @@ class Assembly:
                 for a in self.agents:
                     if a.uav == slot.uav:
                         a.agent.receive(out.detections)
+                self._share_detections(slot.uav, list(out.detections), t, tick)
         agents = [a for a in self.agents if tick % a.divisor == 0]
         team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
         for a in agents:                                                  # then every agent fuses and plans
@@ -252,6 +282,8 @@ class Assembly:
         road = (getattr(estimator, "road_id", None) or "") if getattr(estimator, "on_road", False) else ""
         self.recorder.append("estimates", **_estimate_row(tick, t, uav, result.local_estimate, result.used_detections,
                                                           str(road)))
+        if self.agents[uav].measurements:
+            self._record_sharing(tick, t, uav, estimator)
         if self.agents[uav].agent.fusion is not None:
             self.recorder.append("fused_estimates", **_estimate_row(tick, t, uav, result.estimate, 0))
         sp = result.setpoint
@@ -262,6 +294,16 @@ class Assembly:
         elif isinstance(sp, VelocitySetpoint):
             cmd.update(vx=sp.v_W[0], vy=sp.v_W[1], vz=sp.v_W[2])
         self.recorder.append("commands", **cmd)
+
+    def _record_sharing(self, tick: int, t: float, uav: int, estimator: Any) -> None:
+        """``measurement_sharing``: per agent step, the teammates' detections delivered to UAV ``uav`` so far and those
+        its tracker's updates used so far (counted by the sensor ids that are not the UAV's own)."""
+        own = {s.name for s in self.sensors if s.uav == uav}
+        used = getattr(estimator, "used_by_sensor", {})
+        self.recorder.append("measurement_sharing", tick=tick, t=t, uav=uav,
+                             received=self.shared_received.get(uav, 0),
+                             own_used=sum(n for k, n in used.items() if k in own),
+                             mates_used=sum(n for k, n in used.items() if k not in own))
 
     def _check_collisions(self, tick: int, t: float) -> None:
         if self.quads is None:
@@ -372,11 +414,11 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
         if f.method == "hcmci":
             _check_consensus_estimator(loaded, i, estimator)
             team = HcmciTeam(HcmciConfig(rounds=f.rounds, gain=f.b))  # one config for all: worlds.checks
-        elif f.method != "none":
+        elif f.method not in ("none", "measurements"):
             fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz"),
-                                hcmci=f.method == "hcmci"))
+                                hcmci=f.method == "hcmci", measurements=f.method == "measurements"))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents,
                     hcmci=team)
 

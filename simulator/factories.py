@@ -13,7 +13,8 @@ from typing import Any
 from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
 from autonomy.guidance.waypoints import WaypointConfig, WaypointGuidance
 from simulator.plugins import load_plugin
-from worlds.schema import BearingSpec, BoxSpec, CameraSpec, FovSpec, RadarSpec, UavSpec, World
+from worlds.schema import (BearingSpec, BoxSpec, CameraSpec, FormationSpec, FovSpec, ImmSpec, RadarSpec, UavSpec,
+                           World)
 
 __all__ = [
     "build_car_fleet",
@@ -95,7 +96,13 @@ def build_estimator(uav: UavSpec, index: int, network: Any = None) -> Any:
         tracker = TrackerConfig(filter=ROAD_FALLBACK_FILTER[est.type], model=est.model, **est.params)
         return RoadConstrainedTracker(RoadTrackerConfig(tracker=tracker, road=RoadFilterConfig(variant=est.type,
                                                                                                 **road)), network)
-    return SingleTargetTracker(TrackerConfig(filter=est.type, model=est.model, **est.params))
+    given: dict[str, Any] = {"filter": est.type, "model": est.model}
+    if uav.autonomy.fusion.method == "measurements":  # own and teammates' detections of one time: one update
+        given["stack_scans"] = True
+    if est.type == "imm":
+        imm = est.imm if est.imm is not None else ImmSpec()
+        given.update(imm_turn_rate=math.radians(imm.turn_rate_deg_s), imm_q_turn=imm.q_turn, imm_p_stay=imm.p_stay)
+    return SingleTargetTracker(TrackerConfig(**{**given, **est.params}))
 
 
 def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> Any:
@@ -119,11 +126,32 @@ def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> 
         from autonomy.guidance.nmpc_config import NmpcConfig
 
         return NmpcStandoffGuidance(NmpcConfig(**common, **g.params), slot=index, buildings=buildings)
+    if g.type == "formation":
+        return _formation(uav, index, team_size)
     if g.type == "fast_mpc":
         from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
 
         return FastMpcGuidance(FastMpcConfig(altitude=g.altitude, **g.params))
     raise ValueError(f"unknown guidance type {g.type!r}")
+
+
+def _formation(uav: UavSpec, index: int, team_size: int) -> Any:
+    """FIM-optimal formation guidance of UAV ``index`` in a team of ``team_size`` (:class:`FormationSpec`)."""
+    from autonomy.guidance.formation.guidance import FormationConfig, FormationGuidance
+    from autonomy.guidance.formation.jacobi import JacobiGains
+
+    g = uav.autonomy.guidance
+    form = g.formation if g.formation is not None else FormationSpec()
+    sigma_deg = form.sigma_bearing_deg
+    if sigma_deg is None:
+        sigma_deg = next(s.sigma_azimuth_deg for s in uav.sensors if isinstance(s, BearingSpec))  # worlds.checks
+    cfg = FormationConfig(team_size=team_size, sigma_bearing=math.radians(sigma_deg),
+                          ranges=None if form.ranges is None else tuple(form.ranges),
+                          gains=JacobiGains(**form.gains.model_dump()), dt=1.0 / uav.autonomy.rate_hz,
+                          max_speed=g.speed, backward_weight=form.backward_weight, n_rotations=form.n_rotations,
+                          altitude=g.altitude, altitude_gain=form.altitude_gain, geometry=form.geometry,
+                          trail_fan=math.radians(form.trail_fan_deg), **g.params)
+    return FormationGuidance(cfg, agent_id=index)
 
 
 def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:

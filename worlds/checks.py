@@ -79,6 +79,7 @@ def check_world(world: World) -> list[WorldIssue]:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
                                      "a road network in 'roads' for the vehicle to drive on"))
     issues.extend(_hcmci_issues(world))
+    issues.extend(_formation_imm_issues(world))
     uav_ids = {u.id for u in world.uavs} | {"base"}
     for i, o in enumerate(world.comms.outages):
         if o.end_s <= o.start_s:
@@ -128,4 +129,50 @@ def _hcmci_issues(world: World) -> list[WorldIssue]:
             issues.append(WorldIssue(f"uavs[{i}].autonomy.estimator.params.target_height", height,
                                      f"{first[4]!r}, the target height of uavs[{k}]: the hcmci team tracks one "
                                      "target on one plane"))
+    return issues
+
+
+SHARED_MEASUREMENT_ESTIMATORS = ("ekf", "ukf", "ckf", "imm")
+"""Estimators that stack the teammates' shared detections with their own (the built-in single-target tracker)."""
+
+
+def _formation_imm_issues(world: World) -> list[WorldIssue]:
+    """Paper 003's pieces: the ``imm`` estimator (model ``cv``; its ``imm`` settings only with it; bearings alone
+    cannot start its track without the teammates' bearings), ``measurements`` fusion (a tracker that stacks them), and
+    ``formation`` guidance (a team of every UAV, one range per UAV, a bearing σ to weigh the geometry with)."""
+    issues: list[WorldIssue] = []
+    n = len(world.uavs)
+    for i, uav in enumerate(world.uavs):
+        where = f"uavs[{i}].autonomy"
+        est, fusion, g = uav.autonomy.estimator, uav.autonomy.fusion, uav.autonomy.guidance
+        if est.imm is not None and est.type != "imm":
+            issues.append(WorldIssue(f"{where}.estimator.imm", est.imm.model_dump(),
+                                     f"no 'imm' settings unless the type is imm (type is {est.type!r})"))
+        if est.type == "imm" and est.model != "cv":
+            issues.append(WorldIssue(f"{where}.estimator.model", est.model,
+                                     "'cv': the imm's modes (CV and coordinated turns) share the CV state layout"))
+        bearing_only = bool(uav.sensors) and all(s.type in ("bearing", "camera") for s in uav.sensors)
+        if est.type == "imm" and bearing_only and fusion.method != "measurements":
+            issues.append(WorldIssue(f"{where}.fusion.method", fusion.method,
+                                     "'measurements': this UAV's imm sees bearings only, and one bearing line cannot "
+                                     "start a track; the teammates' bearings can"))
+        if fusion.method == "measurements" and est.type not in SHARED_MEASUREMENT_ESTIMATORS:
+            issues.append(WorldIssue(f"{where}.estimator.type", est.type,
+                                     f"one of {', '.join(SHARED_MEASUREMENT_ESTIMATORS)}: fusion method measurements "
+                                     "needs the built-in tracker, which stacks the shared detections with its own"))
+        if g.formation is not None and g.type != "formation":
+            issues.append(WorldIssue(f"{where}.guidance.formation", g.formation.model_dump(),
+                                     f"no 'formation' settings unless the type is formation (type is {g.type!r})"))
+        if g.type != "formation":
+            continue
+        if n < 2:
+            issues.append(WorldIssue(f"{where}.guidance.type", g.type, "formation guidance in a team of >= 2 UAVs "
+                                                                       f"(this world has {n})"))
+        form = g.formation
+        if form is not None and form.ranges is not None and len(form.ranges) != n:
+            issues.append(WorldIssue(f"{where}.guidance.formation.ranges", list(form.ranges),
+                                     f"one range per UAV of the world ({n} values, m)"))
+        if (form is None or form.sigma_bearing_deg is None) and not any(s.type == "bearing" for s in uav.sensors):
+            issues.append(WorldIssue(f"{where}.guidance.formation.sigma_bearing_deg", None,
+                                     "a bearing noise σ in degrees: this UAV has no bearing sensor to take it from"))
     return issues

@@ -21,10 +21,13 @@ __all__ = [
     "DecoySpec",
     "EnvironmentSection",
     "EstimatorSpec",
+    "FormationSpec",
     "FovSpec",
     "GroundVehicleSpec",
     "GuidanceSpec",
+    "ImmSpec",
     "InitialPose",
+    "JacobiGainsSpec",
     "OsmSection",
     "OutageSpec",
     "RadarSpec",
@@ -249,18 +252,29 @@ def _check_plugin(kind: str, plugin: str | None) -> None:
         raise ValueError(f"plugin must look like 'package.module:Class', got {plugin!r}")
 
 
-class EstimatorSpec(Strict):
-    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter, a
-    road-constrained tracker (paper 002: ``maekf`` pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on
-    the world's road map, with junction hypotheses and an unconstrained fallback off the map), or a user plugin."""
+class ImmSpec(Strict):
+    """Paper 003's IMM (``autonomy.estimation.imm.cv_ct_imm``): EKFs on CV and on coordinated turns at ±ω; the CV
+    mode's white-acceleration density is the tracker's ``params.q``."""
 
-    type: Literal["ekf", "ukf", "ckf", "scif", "maekf", "ecukf", "plugin"] = "ekf"
+    turn_rate_deg_s: PositiveFloat = Field(17.1887, description="ω of the two turn modes, deg/s (0.3 rad/s)")
+    q_turn: PositiveFloat = Field(0.05, description="white-acceleration density of the turn modes, m^2/s^3")
+    p_stay: float = Field(0.95, gt=0, lt=1, description="diagonal of the mode-transition matrix")
+
+
+class EstimatorSpec(Strict):
+    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or paper
+    003's ``imm`` (CV + CT ±ω EKFs; model ``cv``), a road-constrained tracker (paper 002: ``maekf``
+    pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on the world's road map, with junction hypotheses and
+    an unconstrained fallback off the map), or a user plugin."""
+
+    type: Literal["ekf", "ukf", "ckf", "scif", "imm", "maekf", "ecukf", "plugin"] = "ekf"
     model: Literal["cv", "singer"] = "cv"
     plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="TrackerConfig fields, or keyword arguments of a plugin class")
     road: dict[str, Any] = Field(default_factory=dict,
                                  description="maekf/ecukf: RoadFilterConfig fields (autonomy.estimation.road.config)")
+    imm: ImmSpec | None = Field(None, description="imm: the mode set's settings (None: the defaults)")
 
     @model_validator(mode="after")
     def _plugin(self) -> EstimatorSpec:
@@ -268,8 +282,34 @@ class EstimatorSpec(Strict):
         return self
 
 
+class JacobiGainsSpec(Strict):
+    """PD gains of the formation law in Jacobi coordinates (``autonomy.guidance.formation.jacobi.JacobiGains``)."""
+
+    kp_shape: PositiveFloat = Field(0.25, description="shape stiffness, 1/s^2")
+    kd_shape: PositiveFloat = Field(1.0, description="shape damping, 1/s")
+    kp_center: PositiveFloat = Field(0.25, description="centroid stiffness, 1/s^2")
+    kd_center: PositiveFloat = Field(1.0, description="centroid damping, 1/s")
+
+
+class FormationSpec(Strict):
+    """Paper 003's FIM-optimal formation (``autonomy.guidance.formation.guidance.FormationConfig``); the team is every
+    UAV of the world (agent i = uavs[i]), the speed limit is the guidance ``speed`` and the altitude its ``altitude``;
+    the guidance step is the agent's period."""
+
+    sigma_bearing_deg: PositiveFloat | None = Field(
+        None, description="bearing noise σ behind det F, deg (None: the UAV's bearing sensor's sigma_azimuth_deg)")
+    ranges: list[PositiveFloat] | None = Field(None, description="desired range of each UAV to the target, m (None: "
+                                                                 "each keeps its current range, as Algorithm 1)")
+    gains: JacobiGainsSpec = Field(default_factory=JacobiGainsSpec)
+    backward_weight: NonNegFloat = Field(10.0, description="penalty on moves against the target's travel")
+    n_rotations: int = Field(72, ge=4, description="coarse grid of the free rotation search")
+    altitude_gain: NonNegFloat = Field(1.0, description="k_z of the altitude hold, 1/s")
+    geometry: Literal["optimal", "trail"] = Field("optimal", description="Algorithm 1, or the trailing-fan baseline")
+    trail_fan_deg: float = Field(15.0, gt=0, le=90, description="half-angle of the trailing fan, deg")
+
+
 class GuidanceSpec(Strict):
-    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "plugin"] = "hold"
+    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "plugin"] = "hold"
     plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
     standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
     speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
@@ -277,6 +317,7 @@ class GuidanceSpec(Strict):
     waypoints: list[Vec3] = Field(default_factory=list, description="for type waypoints, m")
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="further fields of the law's config, or keyword arguments of a plugin")
+    formation: FormationSpec | None = Field(None, description="type formation: its settings (None: the defaults)")
 
     @model_validator(mode="after")
     def _plugin(self) -> GuidanceSpec:
@@ -288,11 +329,13 @@ class GuidanceSpec(Strict):
 
 class FusionSpec(Strict):
     """Fusion across the team: track-to-track fusion of the teammates' shared estimates (``convex``,
-    ``covariance_intersection``: ``autonomy.fusion.track_fusion``), or HCMCI consensus on information (``hcmci``:
+    ``covariance_intersection``: ``autonomy.fusion.track_fusion``), HCMCI consensus on information (``hcmci``:
     ``autonomy.fusion.hcmci_team``; needs the ``scif`` estimator; the UAVs due at a tick fuse as a team over the radio
-    links that are up)."""
+    links that are up), or raw measurement sharing (``measurements``: ``autonomy.fusion.measurement_sharing``; every
+    teammate's detections reach this UAV over the radio, and its tracker stacks them with its own per scan time:
+    paper 003's centralised augmented measurement)."""
 
-    method: Literal["none", "convex", "covariance_intersection", "hcmci"] = "none"
+    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements"] = "none"
     max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
     q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
     rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")

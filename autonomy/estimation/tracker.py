@@ -21,6 +21,14 @@ that prior; the team's consensus result then goes back through :meth:`~SingleTar
 older than the step time are applied locally first: a contribution ``(S_I, i)`` is information about the state at the
 scan's own time, and adds exactly to a prior only at that time (there is no exact way to move it to a later prior
 through the process noise).
+
+With ``stack_scans`` the detections of every sensor taken at one time form one scan (e.g. a UAV's own bearing and
+the bearings its teammates shared): each sensor's best gated detection is kept, and the kept ones update the filter
+once as a :class:`~autonomy.estimation.measurements.StackedMeasurement` (paper 003's centralised augmented
+measurement). Bearings of two or more sensors whose lines cross at ``min_crossing_angle`` or more also fix a position
+(their least-squares intersection, with the inverse of the bearings' Fisher information as its covariance), which
+initiates tracks and judges divergence like a radar fix. The ``imm`` filter is paper 003's IMM of CV and CT(±ω) EKFs
+(:func:`~autonomy.estimation.imm.cv_ct_imm`) on the ``cv`` layout.
 """
 
 from __future__ import annotations
@@ -34,7 +42,8 @@ from scipy.special import gammaincinv
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.factory import make_filter
 from autonomy.estimation.linalg import tria
-from autonomy.estimation.measurements import measurement_model
+from autonomy.estimation.imm import cv_ct_imm
+from autonomy.estimation.measurements import StackedMeasurement, measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
 from autonomy.estimation.scif import SqrtInformation
 from autonomy.guidance.types import TargetEstimate
@@ -69,7 +78,7 @@ class TrackerConfig:
     Attributes
     ----------
     filter : str
-        ``ekf``, ``ukf``, ``ckf`` or ``scif``.
+        ``ekf``, ``ukf``, ``ckf``, ``scif``, or ``imm`` (CV + CT(±``imm_turn_rate``) EKFs; needs ``model="cv"``).
     model : str
         Motion model: ``cv`` (nearly constant velocity) or ``singer``.
     q : float
@@ -104,6 +113,16 @@ class TrackerConfig:
         velocity σ near 90 m/s; a car's speed prior bounds that.
     target_height : float
         Height of the ground targets (m).
+    imm_turn_rate : float
+        ``imm``: turn rate ω of the two coordinated-turn modes (rad/s), > 0.
+    imm_q_turn : float
+        ``imm``: white-acceleration spectral density of the turn modes (m²/s³), > 0 (the CV mode uses ``q``).
+    imm_p_stay : float
+        ``imm``: diagonal of the mode-transition matrix, in (0, 1); the rest is spread evenly.
+    stack_scans : bool
+        Stack the detections of all sensors taken at one time into one update (module docstring).
+    min_crossing_angle : float
+        Smallest angle between two bearing lines for their intersection to fix a position (rad), in (0, π/2].
     """
 
     filter: str = "ekf"
@@ -120,12 +139,28 @@ class TrackerConfig:
     max_target_accel: float = 4.0
     initial_speed_sigma: float | None = 15.0
     target_height: float = 0.0
+    imm_turn_rate: float = 0.3
+    imm_q_turn: float = 0.05
+    imm_p_stay: float = 0.95
+    stack_scans: bool = False
+    min_crossing_angle: float = float(np.deg2rad(10.0))
 
     def __post_init__(self) -> None:
-        if self.filter not in ("ekf", "ukf", "ckf", "scif"):
-            raise ValueError(f"TrackerConfig.filter must be ekf|ukf|ckf|scif, got {self.filter!r}")
+        if self.filter not in ("ekf", "ukf", "ckf", "scif", "imm"):
+            raise ValueError(f"TrackerConfig.filter must be ekf|ukf|ckf|scif|imm, got {self.filter!r}")
         if self.model not in ("cv", "singer"):
             raise ValueError(f"TrackerConfig.model must be cv|singer, got {self.model!r}")
+        if self.filter == "imm" and self.model != "cv":
+            raise ValueError(f"TrackerConfig.model must be cv with the imm filter (its modes share the CV layout), "
+                             f"got {self.model!r}")
+        for name in ("imm_turn_rate", "imm_q_turn"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0 < self.imm_p_stay < 1:
+            raise ValueError(f"TrackerConfig.imm_p_stay must be in (0, 1), got {self.imm_p_stay!r}")
+        if not 0 < self.min_crossing_angle <= np.pi / 2:
+            raise ValueError(f"TrackerConfig.min_crossing_angle must be in (0, π/2] rad, got "
+                             f"{self.min_crossing_angle!r}")
         for name in ("q", "singer_alpha", "singer_sigma_a", "max_target_speed", "tentative_window_s", "lost_after_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
@@ -152,6 +187,30 @@ def make_motion_model(cfg: TrackerConfig) -> MotionModel:
 def _fixes_position(det: object) -> bool:
     """Whether ``det`` alone fixes a ground position (what :func:`_ground_fix` inverts): a box, or a radar return."""
     return det.kind == "box" or (det.kind == "radar" and np.size(det.z) >= 2)
+
+
+def _triangulate(dets: Sequence[object], min_crossing_angle: float) -> tuple[object, np.ndarray, np.ndarray] | None:
+    """Least-squares intersection of the azimuth lines of the bearing / camera detections among ``dets`` (taken at
+    one time): ``(stacked measurement, (x, y), 2x2 covariance)``, or None unless two lines cross at
+    ``min_crossing_angle`` (rad) or more with the target ahead of every sensor. The covariance is the inverse of the
+    bearings' Fisher information ``Σ n_i n_iᵀ / (σ_i² r_i²)`` at the intersection (n_i: normal of line i)."""
+    bearings = [d for d in dets if d.kind in ("bearing", "camera")]
+    if len(bearings) < 2:
+        return None
+    az = np.array([float(np.atleast_1d(d.z)[0]) for d in bearings])
+    p_s = np.array([np.asarray(d.p_sensor_W, dtype=float)[:2] for d in bearings])
+    n = np.c_[-np.sin(az), np.cos(az)]
+    A = n.T @ n
+    # two lines at angle β give λ_min(Σ n nᵀ) = 1 − |cos β|; more lines only add
+    if np.linalg.eigvalsh(A)[0] < 1.0 - np.cos(min_crossing_angle):
+        return None
+    xy = np.linalg.solve(A, n.T @ np.sum(n * p_s, axis=1))
+    ahead = np.sum((xy - p_s) * np.c_[np.cos(az), np.sin(az)], axis=1)
+    if np.any(ahead <= 0):
+        return None
+    var = np.array([float(np.atleast_2d(d.R)[0, 0]) for d in bearings]) * np.sum((xy - p_s) ** 2, axis=1)
+    F = (n / var[:, None]).T @ n
+    return StackedMeasurement(parts=tuple(bearings)), xy, np.linalg.inv(F)
 
 
 def _ground_fix(det: object, target_height: float) -> tuple[np.ndarray, np.ndarray] | None:
@@ -189,6 +248,7 @@ class SingleTargetTracker:
         self.gated_out = 0
         self.updates = 0
         self.initiations = 0
+        self.used_by_sensor: dict[str, int] = {}  # detections that updated the track, per sensor id
         self.dropped_diverged = 0
         self._missed = 0
         self._gates: dict[int, float] = {}
@@ -200,6 +260,8 @@ class SingleTargetTracker:
         fixes."""
         cfg = self.config
         fixes = [(d, f) for d in dets if (f := _ground_fix(d, cfg.target_height)) is not None]
+        if cfg.stack_scans and (tri := _triangulate(dets, cfg.min_crossing_angle)) is not None:
+            fixes.append((tri[0], tri[1:]))
         if not fixes:
             return False
         t_now = fixes[0][0].t_meas
@@ -244,7 +306,11 @@ class SingleTargetTracker:
             if name in self.layout:
                 i = self.layout.index(name)
                 P0[i, i] = 4.0
-        self.filter = make_filter(cfg.filter, self.model, x0, P0, det.t_meas, target_height=cfg.target_height)
+        if cfg.filter == "imm":
+            self.filter = cv_ct_imm(x0, P0, det.t_meas, q_cv=cfg.q, q_ct=cfg.imm_q_turn, turn_rate=cfg.imm_turn_rate,
+                                    p_stay=cfg.imm_p_stay, target_height=cfg.target_height)
+        else:
+            self.filter = make_filter(cfg.filter, self.model, x0, P0, det.t_meas, target_height=cfg.target_height)
         self.last_update_t = det.t_meas
         self._tentative = []
         self.initiations += 1
@@ -302,8 +368,9 @@ class SingleTargetTracker:
         """Initiate, gate and update from ``detections``; with ``defer_at`` (s), the gated detections of the scans
         taken at ``defer_at`` give their summed information contribution (returned) instead of updates."""
         scans: dict[tuple[float, str], list] = {}
+        stack = self.config.stack_scans
         for d in detections:
-            scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
+            scans.setdefault((d.t_meas, "" if stack else d.sensor_id), []).append(d)
         ordered = sorted(scans.items(), key=lambda kv: kv[0][0])
         deferred: list[SqrtInformation] = []  # contributions against the current filter's prior at defer_at
         for (t_meas, _), dets in ordered:
@@ -315,17 +382,12 @@ class SingleTargetTracker:
                 continue
             if t_meas < self.filter.t:
                 continue  # out of sequence: older than the track
-            best, best_nis = None, np.inf
-            for d in dets:
-                nis = self._nis(d)
-                gate = self._gate(np.size(d.z))
-                if nis <= gate and nis < best_nis:
-                    best, best_nis = d, nis
-            fixing = any(_fixes_position(d) for d in dets)
-            if best is None:
-                self.gated_out += len(dets)
-                # only scans that fix a position (radar, box) judge divergence: a bearing fits any range on its line
-                self._missed += fixing
+            chosen, gated_out = self._associate(dets)
+            self.gated_out += gated_out
+            if not chosen:
+                # only scans that fix a position (radar, box, crossing bearings) judge divergence: a single bearing
+                # fits any range on its line
+                self._missed += self._fixing(dets)
                 if self._missed >= self.config.max_missed_scans:  # diverged: start again from these fixes
                     self.filter = None
                     deferred = []
@@ -333,19 +395,46 @@ class SingleTargetTracker:
                     self._tentative = []
                     self._initiate(dets)
                 continue
+            best = chosen[0] if len(chosen) == 1 else StackedMeasurement(parts=tuple(chosen))
             if defer_at is not None and abs(t_meas - defer_at) <= TIME_TOLERANCE:
                 deferred.append(self.filter.information(best)[0])
             else:
                 self.filter.update(best)
-            if _fixes_position(best):
+            if self._fixing(chosen):
                 self._missed = 0
             self.updates += 1
+            for d in chosen:
+                self.used_by_sensor[d.sensor_id] = self.used_by_sensor.get(d.sensor_id, 0) + 1
             self.last_update_t = t_meas
         if not deferred:
             return None
         if len(deferred) == 1:
             return deferred[0]
         return SqrtInformation(tria(np.hstack([c.S for c in deferred])), np.sum([c.h for c in deferred], axis=0))
+
+    def _associate(self, dets: Sequence[object]) -> tuple[list, int]:
+        """Each sensor's detection of the smallest NIS inside the gate (global nearest neighbour per sensor), in the
+        order of ``dets``, and the number of detections of the sensors that had none inside."""
+        by_sensor: dict[str, list] = {}
+        for d in dets:
+            by_sensor.setdefault(d.sensor_id, []).append(d)
+        chosen, gated_out = [], 0
+        for group in by_sensor.values():
+            best, best_nis = None, np.inf
+            for d in group:
+                nis = self._nis(d)
+                if nis <= self._gate(np.size(d.z)) and nis < best_nis:
+                    best, best_nis = d, nis
+            if best is None:
+                gated_out += len(group)
+            else:
+                chosen.append(best)
+        return chosen, gated_out
+
+    def _fixing(self, dets: Sequence[object]) -> bool:
+        """Whether ``dets`` (one scan) fix a position: a radar or box detection, or (stacking) crossing bearings."""
+        return any(_fixes_position(d) for d in dets) or (
+            self.config.stack_scans and _triangulate(dets, self.config.min_crossing_angle) is not None)
 
     def estimate(self, t: float) -> TargetEstimate | None:
         """The track's estimate predicted to ``t`` (s), or None without a track (dropping it if lost by ``t``)."""

@@ -8,6 +8,7 @@ from the ``buildings`` list plus whatever the town or the extract holds. Problem
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -56,6 +57,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
     """Build the road network and buildings of ``world`` (``world_file`` resolves relative map paths)."""
     file = str(world_file)
     roads = world.roads
+    mesh = None
     network: RoadNetwork | None = None
     buildings: list[Building] = []
     where = "roads"
@@ -79,11 +81,9 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
             town = generate_town(TownConfig(**params), rng)
             network, buildings = town.network, list(town.buildings)
         elif roads.osm is not None:
-            from worlds.osm import load_osm
-
             where = "roads.osm.path"
             path = resolve_map_path(roads.osm.path, world_file)
-            town = load_osm(path, bbox=roads.osm.bbox, default_height=roads.osm.default_height)
+            town, mesh = _import_osm(path, roads.osm.bbox, roads.osm.default_height)
             network, buildings = town.network, list(town.buildings)
     except WorldError:
         raise
@@ -106,12 +106,29 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
     if issues:
         raise WorldError(file, issues)
 
-    mesh = None
-    if network is not None:
+    if network is not None and mesh is None:
         from worlds.roads.mesh import road_surface_mesh
 
         mesh = road_surface_mesh(network)
     return WorldGeometry(network=network, buildings=buildings, road_mesh=mesh)
+
+
+def _import_osm(path: Path, bbox: Any, default_height: float) -> tuple[Any, Any]:
+    """(town, road surface mesh) of an OpenStreetMap file, from the map cache when it holds them
+    (:mod:`worlds.map_cache`)."""
+    from worlds.map_cache import cached
+    from worlds.osm import load_osm
+    from worlds.roads.mesh import road_surface_mesh
+
+    def build() -> tuple[Any, Any]:
+        town = load_osm(path, bbox=bbox, default_height=default_height)
+        return town, road_surface_mesh(town.network)
+
+    if not path.is_file():
+        return build()  # load_osm says what is wrong with the path
+    params = repr((None if bbox is None else tuple(bbox), float(default_height)))
+    key = [hashlib.sha256(path.read_bytes()).digest(), params]
+    return cached("osm", key, build)
 
 
 def _value_at(world: World, dotted: str) -> Any:

@@ -34,6 +34,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from worlds.map_cache import cache_root
+
 __all__ = ["BufferedCall", "cache_dir", "compiled_nlpsol"]
 
 _LOG = logging.getLogger(__name__)
@@ -43,12 +45,9 @@ _warned: set[str] = set()
 
 
 def cache_dir() -> Path:
-    """Directory of the compiled libraries (``SKYTRACK_CACHE_DIR``, else ``$XDG_CACHE_HOME/skytrack/casadi``)."""
-    env = os.environ.get("SKYTRACK_CACHE_DIR")
-    if env:
-        return Path(env).expanduser() / "casadi"
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "skytrack" / "casadi"
+    """Directory of the compiled libraries: ``casadi`` under skytrack's cache root (``SKYTRACK_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/skytrack``, else ``~/.cache/skytrack``)."""
+    return cache_root() / "casadi"
 
 
 def _warn_once(msg: str) -> None:

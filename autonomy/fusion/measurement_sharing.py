@@ -3,8 +3,10 @@
 Every detection a UAV's sensor produces is also sent to its teammates over the radio. A teammate's copy keeps what
 the detection says (``z``, ``R``, the sensor's id and position, ``t_meas``) and arrives when the sensor delivered it
 plus the radio's delay; the receiving tracker stacks it with its own detections of the same ``t_meas``
-(:class:`~autonomy.estimation.tracker.TrackerConfig` ``stack_scans``). A copy that arrives after its scan was
-processed is older than the track and is dropped there, like any out-of-sequence measurement.
+(:class:`~autonomy.estimation.tracker.TrackerConfig` ``stack_scans``). A copy that arrives after the tracker has
+moved past its scan time (an update of a newer scan, or an agent step after it) is dropped there like any
+out-of-sequence measurement: with the agents stepping at the sensors' rate, a radio delay of one agent period or
+more leaves each UAV its own bearings only.
 """
 
 from __future__ import annotations

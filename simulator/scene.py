@@ -9,6 +9,7 @@ a 500-building town adds nothing measurable to a step and builds in tens of mill
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -17,6 +18,7 @@ import pybullet as p
 import trimesh
 
 from worlds.geometry import Building
+from worlds.map_cache import cached
 
 __all__ = ["BUILDING_RGBA", "GROUND_RGBA", "ROAD_RGBA", "Scene", "SceneConfig"]
 
@@ -59,6 +61,22 @@ def _extrude(footprint: np.ndarray, z0: float, z1: float) -> tuple[np.ndarray, n
     q = 6 * n_t + 4 * np.arange(k)[:, None]
     wall_faces = np.concatenate([q + [0, 1, 2], q + [0, 2, 3]])
     return verts, np.concatenate([cap_faces, wall_faces]).astype(int)
+
+
+def _extrude_all(buildings: Sequence[Building]) -> tuple[np.ndarray, np.ndarray]:
+    """One mesh of all ``buildings`` extruded (:func:`_extrude`): (vertices, faces)."""
+    parts = [_extrude(b.footprint, b.base_z, b.top_z) for b in buildings]
+    offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+    return (np.concatenate([v for v, _ in parts]),
+            np.concatenate([f + o for (_, f), o in zip(parts, offsets, strict=True)]))
+
+
+def _extrude_key(buildings: Sequence[Building]) -> list[bytes | str]:
+    """Map-cache key of :func:`_extrude_all` (a city's 446 footprints take ≈ 0.4 s to triangulate): the footprints,
+    their heights and the meshing code."""
+    data = b"".join(np.ascontiguousarray(b.footprint, dtype=float).tobytes() + b"|"
+                    + np.array([b.base_z, b.top_z], dtype=float).tobytes() for b in buildings)
+    return [data, inspect.getsource(_extrude), inspect.getsource(_extrude_all)]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -171,12 +189,9 @@ class Scene:
         return p.createMultiBody(0, col, vis, physicsClientId=c)
 
     def _extruded(self, buildings: Sequence[Building]) -> int:
-        parts = [_extrude(b.footprint, b.base_z, b.top_z) for b in buildings]
-        offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
-        mesh = trimesh.Trimesh(vertices=np.concatenate([v for v, _ in parts]),
-                               faces=np.concatenate([f + o for (_, f), o in zip(parts, offsets, strict=True)]),
-                               process=False)
-        return self.add_static_mesh(mesh, BUILDING_RGBA, collision=True)
+        verts, faces = cached("extruded", _extrude_key(buildings), lambda: _extrude_all(buildings))
+        return self.add_static_mesh(trimesh.Trimesh(vertices=verts, faces=faces, process=False), BUILDING_RGBA,
+                                    collision=True)
 
     def add_static_mesh(self, mesh: trimesh.Trimesh, rgba: Sequence[float], collision: bool) -> int:
         """Add one static triangle mesh (concave collision when ``collision``; visual only otherwise)."""

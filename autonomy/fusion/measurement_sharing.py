@@ -5,8 +5,9 @@ the detection says (``z``, ``R``, the sensor's id and position, ``t_meas``) and 
 plus the radio's delay; the receiving tracker stacks it with its own detections of the same ``t_meas``
 (:class:`~autonomy.estimation.tracker.TrackerConfig` ``stack_scans``). A copy that arrives after the tracker has
 moved past its scan time (an update of a newer scan, or an agent step after it) is dropped there like any
-out-of-sequence measurement: with the agents stepping at the sensors' rate, a radio delay of one agent period or
-more leaves each UAV its own bearings only.
+out-of-sequence measurement: with the agents stepping at the sensors' rate, a copy delayed by up to one agent period
+still updates the track at its scan time (after the own bearing of that time, sequentially), and a longer radio delay
+leaves each UAV its own bearings only.
 """
 
 from __future__ import annotations

@@ -86,3 +86,17 @@ def test_the_trailing_fan_is_the_poorer_geometry(tmp_path):
     t, uavs, car = _geometry(trail)
     gap = _log_det_gap(uavs, car)[t >= SETTLED]
     assert gap.mean() > 1.0  # nearly parallel bearing lines (measured 1.8): far from the bound the optimum reaches
+
+
+def test_over_a_radio_with_a_delay_of_one_agent_period_every_bearing_is_still_used(tmp_path):
+    res = run("formation_imm", duration=6.0, seed=2, out_dir=tmp_path,
+              overrides=["comms.model=rayleigh", "comms.latency_s=0.1"])
+    assert res.status == "completed", res.error
+    comms = res.metrics["comms"]
+    assert comms["lost"] == 0 and comms["in_flight"] > 0  # ≈ 100 m apart: exp(−(d / 1 km)³) ≈ 1; the last in flight
+    sh = res.stream("measurement_sharing")
+    for k in range(3):
+        i = np.flatnonzero(sh["uav"] == k)[-1]
+        # each copy arrives with the next scan and updates the track at its own time, after the own bearing
+        assert sh["received"][i] == 2 * (60 - 1)
+        assert sh["mates_used"][i] >= 2 * sh["own_used"][i] - 5

@@ -229,3 +229,23 @@ def test_dilate_recomputes_an_invalid_buffer_with_more_segments(monkeypatch):
     corner = np.column_stack([10 + 1.999 * np.cos(a), 10 + 1.999 * np.sin(a)])  # inside the exact dilation
     assert D.contains(shapely.box(-2, 0, 12, 10)) and D.contains(shapely.box(0, -2, 10, 12))
     assert np.all(pg.contains_points(D, corner, tol=0.0))
+
+
+def test_uavs_fusing_the_same_sets_get_the_same_result_and_adopt_keeps_the_shared_set():
+    """Fusion combines the sets in the order of their owners: any member of a linked group computes the group's
+    result to the last bit, so the mission computes it once and the others adopt it."""
+    ests = [SetMembershipEstimator(SetMembershipConfig(), AREA, owner=k) for k in range(3)]
+    views = [shapely.box(100, 100, 180, 180), shapely.box(150, 120, 190, 200), shapely.Point(170, 150).buffer(45)]
+    for e, F, dets in zip(ests, views, ([box_det([160.0, 140.0])], [], [box_det([205.0, 150.0])]), strict=True):
+        e.predict(1.0)
+        e.update(F, dets)
+    shared = [e.shared for e in ests]
+    f0 = ests[0].fuse([shared[1], shared[2]])
+    f1 = ests[1].fuse([shared[2], shared[0]])
+    assert shapely.equals_exact(f0.X, f1.X, 0.0) and shapely.equals_exact(f0.Xbar, f1.Xbar, 0.0)
+    assert f0.area_X > 0 and f0.area_Xbar < AREA.area - views[0].area  # a real fusion happened
+    adopted = ests[2].adopt(f0)
+    assert adopted.owner == 2 and shapely.equals_exact(adopted.X, f0.X, 0.0)
+    assert ests[2].shared is shared[2]  # what UAV 2 sends next is still its own corrected set
+    with pytest.raises(ValueError, match="adopting"):
+        ests[2].adopt(SetEstimate(t=5.0, X=f0.X, Xbar=f0.Xbar))

@@ -260,14 +260,18 @@ class SetMembershipEstimator:
         return self._est
 
     def fuse(self, neighbours: Sequence[SetEstimate]) -> SetEstimate:
-        """Fuse with the neighbours' post-correction sets of the same time (eqs. 15-16)."""
+        """Fuse with the neighbours' post-correction sets of the same time (eqs. 15-16).
+
+        The sets are combined in the order of their owners, so UAVs fusing the same sets get the same result to the
+        last bit (:meth:`adopt` lets one reuse another's).
+        """
         if not neighbours:
             return self._est
         own = self._local
         for n in neighbours:
             if abs(n.t - own.t) > 1e-9:
                 raise ValueError(f"fusing a set of t={n.t} s with one of t={own.t} s")
-        allsets = [own, *neighbours]
+        allsets = sorted([own, *neighbours], key=lambda e: e.owner)
         X = pg.union_all([s.X for s in allsets])
         for s in allsets:
             if X.is_empty:
@@ -277,6 +281,14 @@ class SetMembershipEstimator:
             X = pg.union_all([pg.intersection_all([X, s.X]), pg.intersection_all([X, s.Xbar])])
         Xbar = pg.intersection_all([s.Xbar for s in allsets])
         self._est = SetEstimate(t=own.t, X=self._bounded(X), Xbar=self._bounded(Xbar), owner=self.owner)
+        return self._est
+
+    def adopt(self, fused: SetEstimate) -> SetEstimate:
+        """Take the result of another UAV's :meth:`fuse` over the same sets as this UAV's own fused estimate (what
+        :meth:`fuse` would compute here); the post-correction set this UAV shares is kept."""
+        if abs(fused.t - self._local.t) > 1e-9:
+            raise ValueError(f"adopting a fused set of t={fused.t} s at t={self._local.t} s")
+        self._est = SetEstimate(t=fused.t, X=fused.X, Xbar=fused.Xbar, owner=self.owner)
         return self._est
 
     def reset(self, estimate: SetEstimate) -> None:

@@ -3,6 +3,7 @@ loop."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -32,7 +33,12 @@ from worlds.build import build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
 
-__all__ = ["Assembly", "Prepared", "build_assembly", "prepare"]
+__all__ = ["Assembly", "Prepared", "WALL_PHASES", "build_assembly", "prepare"]
+
+# phases of a tick whose wall time a run reports (metrics ``wall_time_breakdown_s``): actuation and low-level control
+# of all vehicles, the PyBullet step, sensors (with their raycasts), the agents (estimation, fusion, guidance and the
+# messages between them), recording (events, truth, collision checks)
+WALL_PHASES = ("vehicles", "physics", "sensors", "autonomy", "record")
 
 
 @dataclass
@@ -87,6 +93,7 @@ class Assembly:
     hcmci: HcmciTeam | None = None
     consensus_linked_steps: dict[int, int] = field(default_factory=dict)  # per UAV: team steps with a link up
     consensus_links: list[int] = field(default_factory=list)  # per team step: links up between nodes with a track
+    wall_s: dict[str, float] = field(default_factory=lambda: dict.fromkeys(WALL_PHASES, 0.0))  # wall time per phase
     shared_received: dict[int, int] = field(default_factory=dict)  # per UAV: teammates' detections delivered to it
 
     # -- truth ---------------------------------------------------------------------------------------------------
@@ -202,12 +209,19 @@ class Assembly:
 
     # -- the tick ------------------------------------------------------------------------------------------------
     def step(self, tick: int) -> None:
+        wall, clock = self.wall_s, time.perf_counter
+        t0 = clock()
         fleets = [f for f in (self.quads, self.cars) if f is not None]
         for f in fleets:                       # 1. actuators
             f.apply_actuation()
+        t1 = clock()
         self.scene.step()                      # 2. physics
+        t2 = clock()
         for f in fleets:                       # 3. low-level controllers
             f.after_step(tick)
+        t3 = clock()
+        wall["vehicles"] += (t1 - t0) + (t3 - t2)
+        wall["physics"] += t2 - t1
         t = self.clock.time(tick)
         due = [slot for slot in self.sensors if tick % slot.divisor == 0]
         if due:                                # 4. sensors
@@ -221,6 +235,8 @@ class Assembly:
                     if a.uav == slot.uav:
                         a.agent.receive(out.detections)
                 self._share_detections(slot.uav, list(out.detections), t, tick)
+        t4 = clock()
+        wall["sensors"] += t4 - t3
         agents = [a for a in self.agents if tick % a.divisor == 0]
         team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
         for a in agents:                                                  # then every agent fuses and plans
@@ -239,6 +255,8 @@ class Assembly:
             self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint
             self._record_agent(tick, t, a.uav, result)
+        t5 = clock()
+        wall["autonomy"] += t5 - t4
         if self._outage_ticks:
             self._outage_events(tick, t)
         for f in fleets:                       # 6. record
@@ -247,6 +265,7 @@ class Assembly:
         if tick % self.record_div == 0:
             self._record_truth(tick, t)
             self._check_collisions(tick, t)
+        wall["record"] += clock() - t5
 
     # -- recording -----------------------------------------------------------------------------------------------
     def _record_truth(self, tick: int, t: float) -> None:

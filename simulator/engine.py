@@ -99,6 +99,14 @@ def _versions() -> dict[str, str]:
     return out
 
 
+def _breakdown(wall: float, setup_s: float, phases: dict[str, float]) -> dict[str, float]:
+    """Where a run's wall time went: ``setup`` (world, solvers, scene), each phase of the tick
+    (:data:`simulator.assembly.WALL_PHASES`) and ``other`` (metrics, flushes, the run directory, the rest)."""
+    out = {"setup": setup_s, **phases}
+    out["other"] = max(wall - sum(out.values()), 0.0)
+    return {k: round(v, 4) for k, v in out.items()}
+
+
 def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
     """Build the world, run it for the requested duration, and write the run directory."""
     world = loaded.world
@@ -125,10 +133,12 @@ def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
     assembly: Assembly | None = None
     tracker = MetricsTracker(seed=seed, physics_hz=clock.physics_hz)
     bar = None
+    setup_s = 0.0
     try:
         assembly = build_assembly(prepared, seeds, recorder)
         tracker.attach(assembly)
-        recorder.event("scene_built", 0, 0.0, build_s=round(time.perf_counter() - wall0, 4),
+        setup_s = time.perf_counter() - wall0
+        recorder.event("scene_built", 0, 0.0, build_s=round(setup_s, 4),
                        uavs=len(assembly.uav_ids), ground_vehicles=len(assembly.car_ids),
                        buildings=len(assembly.buildings))
         flush_every = clock.ticks(world.sim.flush_every_s)
@@ -158,6 +168,8 @@ def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
         sim_time = clock.time(max(tick - (0 if status == "completed" else 1), 0))
         metrics = tracker.metrics(sim_time, wall, complete=True)
         metrics["status"] = status
+        if assembly is not None:
+            metrics["wall_time_breakdown_s"] = _breakdown(wall, setup_s, assembly.wall_s)
         recorder.flush(metrics)
         if assembly is not None:
             assembly.close()

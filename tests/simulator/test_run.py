@@ -34,6 +34,17 @@ def test_record_has_every_part(short_run):
     assert set(short_run.record.streams) >= {"uav_truth", "vehicle_truth", "estimates", "commands", "detections"}
 
 
+def test_metrics_say_where_the_wall_time_went(short_run):
+    m = short_run.metrics
+    parts = m["wall_time_breakdown_s"]
+    assert list(parts) == ["setup", "vehicles", "physics", "sensors", "autonomy", "record", "other"]
+    assert all(v >= 0 for v in parts.values())
+    assert sum(parts.values()) == pytest.approx(m["wall_time_s"], abs=2e-3)  # the parts add up to the whole
+    # every phase of a run with quadrotors, a car, radars and agents took time; the tick dominates the remainder
+    assert min(parts[k] for k in ("setup", "vehicles", "physics", "sensors", "autonomy", "record")) > 0
+    assert parts["other"] < 0.5 * m["wall_time_s"]
+
+
 def test_estimates_track_the_physics_truth(short_run):
     """The demo's EKF, fed by the radar, sits within a few radar sigmas of the car's true position."""
     est = short_run.stream("estimates", uav=0)

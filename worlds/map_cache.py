@@ -24,10 +24,11 @@ from typing import TypeVar
 
 import numpy as np
 
-__all__ = ["cache_root", "cached"]
+__all__ = ["KEEP_PER_KIND", "cache_root", "cached"]
 
 _LOG = logging.getLogger(__name__)
 _FORMAT = "skytrack-map-1"  # bump when the meaning of an entry changes
+KEEP_PER_KIND = 16  # entries kept per kind, most recently used first
 _T = TypeVar("_T")
 _warned: set[str] = set()
 
@@ -78,7 +79,9 @@ def cached(kind: str, key: Sequence[bytes | str], build: Callable[[], _T]) -> _T
     if entry.is_file():
         try:
             with entry.open("rb") as f:
-                return pickle.load(f)
+                value = pickle.load(f)
+            _touch(entry)
+            return value
         except Exception as exc:  # noqa: BLE001 - a damaged entry of any kind is rebuilt
             _LOG.warning("map cache entry %s unreadable (%s): rebuilding it", entry, exc)
     value = build()
@@ -92,6 +95,23 @@ def cached(kind: str, key: Sequence[bytes | str], build: Callable[[], _T]) -> _T
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
+        _prune(entry.parent, kind)
     except OSError as exc:
         _warn_once(f"map cache {entry.parent} not writable ({exc}): maps are imported on every run")
     return value
+
+
+def _touch(entry: Path) -> None:
+    """Mark an entry as used now (pruning keeps the most recently used)."""
+    try:
+        os.utime(entry)
+    except OSError:
+        pass  # a read-only cache still serves its entries
+
+
+def _prune(directory: Path, kind: str) -> None:
+    """Keep the ``KEEP_PER_KIND`` most recently used entries of ``kind``: every change to the import code or the
+    parameters makes a new entry (several MB for a city), and old ones would otherwise pile up."""
+    entries = sorted(directory.glob(f"{kind}_*.pkl"), key=lambda f: f.stat().st_mtime, reverse=True)
+    for old in entries[KEEP_PER_KIND:]:
+        old.unlink(missing_ok=True)

@@ -84,3 +84,20 @@ def test_the_helsinki_world_loads_the_same_geometry_from_the_cache(root):
                                   fresh.network.roads[rid].point(np.array([0.0, 5.0])))
     assert [b.top_z for b in again.buildings] == [b.top_z for b in fresh.buildings]
     np.testing.assert_array_equal(again.road_mesh.vertices, fresh.road_mesh.vertices)
+
+
+def test_only_the_most_recently_used_entries_of_a_kind_are_kept(root, monkeypatch):
+    import os
+
+    monkeypatch.setattr(map_cache, "KEEP_PER_KIND", 3)
+    for k in range(3):
+        map_cache.cached("t", [f"k{k}"], lambda k=k: k)
+    for f in (root / "maps").glob("t_*.pkl"):  # all used long ago (coarse file-system clocks cannot order them)
+        os.utime(f, (1.0, 1.0))
+    assert map_cache.cached("t", ["k0"], lambda: -1) == 0  # a hit: k0 is the most recently used now
+    map_cache.cached("t", ["k3"], lambda: 3)  # a fourth entry: one of the unused k1, k2 goes
+    map_cache.cached("u", ["other kind"], lambda: 0)  # other kinds are counted apart
+    assert len(list((root / "maps").glob("t_*.pkl"))) == 3
+    assert map_cache.cached("t", ["k0"], lambda: -1) == 0  # kept, not rebuilt
+    assert map_cache.cached("t", ["k3"], lambda: -1) == 3
+    assert len(list((root / "maps").glob("u_*.pkl"))) == 1

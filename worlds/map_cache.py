@@ -7,7 +7,7 @@ the same for every run of a world; loading the pickled result takes ≈ 0.1 s. E
 ``worlds`` package (any change to the import code makes new entries) and the numpy version. An entry is written to a
 temporary file and published by atomic rename, so parallel campaign workers never read half an entry; an entry that
 cannot be read is rebuilt, and a cache that cannot be written is skipped with one warning: the cache only ever saves
-time.
+time. The ``KEEP_PER_KIND`` most recently used entries of each kind are kept.
 """
 
 from __future__ import annotations

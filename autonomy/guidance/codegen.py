@@ -74,7 +74,10 @@ def compiled_nlpsol(name: str, plugin: str, nlp: dict, opts: dict) -> tuple[ca.F
     lib_opts = {k: v for k, v in opts.items() if k not in ("hess_lag", "jac_fg")}
     lib = cache_dir() / f"{name}_{_problem_key(plugin, nlp, opts, compiler)}.so"
     if lib.exists():  # cached: the virtual-machine solver is never built
-        return ca.nlpsol(name, plugin, str(lib), lib_opts), True
+        try:
+            return ca.nlpsol(name, plugin, str(lib), lib_opts), True
+        except RuntimeError as exc:  # a damaged library: compile it again
+            _LOG.warning("cached CasADi library %s unusable (%s): compiling it again", lib, exc)
     solver = ca.nlpsol(name, plugin, nlp, opts)
     try:
         _compile(solver, name, compiler, lib)

@@ -57,6 +57,16 @@ def test_compiled_solver_matches_the_virtual_machine_and_is_cached(cache):
     assert not [p for p in cache.iterdir() if p.suffix != ".so" or p.name.startswith(".tmp")]  # nothing else left
 
 
+def test_a_damaged_cached_library_is_compiled_again(cache):
+    compiled_nlpsol("rb", "sqpmethod", _rosenbrock(), _QUIET)
+    (lib,) = cache.glob("rb_*.so")
+    lib.write_bytes(b"not a shared library")
+    solver, ok = compiled_nlpsol("rb", "sqpmethod", _rosenbrock(), _QUIET)
+    assert ok and lib.stat().st_size > 1000  # replaced by a real library
+    ref = ca.nlpsol("ref", "sqpmethod", _rosenbrock(), _QUIET)
+    np.testing.assert_allclose(_solve(solver, 0.3), _solve(ref, 0.3), rtol=0, atol=1e-12)
+
+
 def test_a_user_hessian_is_what_the_library_evaluates(cache):
     """hess_lag = 0 turns the SQP into steepest descent-like steps on a (regularised) zero Hessian: a different
     iteration count than the exact Hessian, identical between compiled and uncompiled."""

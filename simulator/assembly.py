@@ -144,7 +144,11 @@ class Assembly:
         st = self.quads.state
         msg = EstimateMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, target_id=0,
                               x=np.concatenate([est.p_W, est.v_W]), P=est.P, t_estimate=est.t)
-        self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
+        self.channel.send(msg, self._positions(st), tick)
+
+    def _positions(self, st: Any) -> dict[str, np.ndarray]:
+        """Every UAV's position by id in the fleet state ``st``: where the radio sends from and to."""
+        return {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}
 
     def _share_detections(self, i: int, detections: list, t: float, tick: int) -> None:
         """Send UAV ``i``'s ``detections`` to the teammates that take them (fusion method measurements): over the radio
@@ -159,8 +163,7 @@ class Assembly:
                 if up[i, j]:
                     self._deliver_detections(j, relayed(detections, 0.0))
             return
-        st = self.quads.state
-        positions = {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}
+        positions = self._positions(self.quads.state)
         for j in takers:
             self.channel.send(DetectionMessage(sender=self.uav_ids[i], receiver=self.uav_ids[j], t_sent=t,
                                                detections=tuple(detections)), positions, tick)
@@ -176,7 +179,7 @@ class Assembly:
         msg = StateMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, p_W=st.p_W[i].copy(),
                            v_W=st.v_W[i].copy(), yaw=_yaw(st.q_WB[i]), plan_p_W=plan,
                            plan_dt=float(getattr(getattr(self.agents[i].agent.guidance, "config", None), "dt", 1.0)))
-        self.channel.send(msg, {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}, tick)
+        self.channel.send(msg, self._positions(st), tick)
 
     def links_up(self, uavs: list[int], tick: int) -> np.ndarray:
         """(n, n) bool: which links between ``uavs`` (indices) are up at ``tick``. Radio: one erasure draw per link

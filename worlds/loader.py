@@ -115,6 +115,16 @@ def _apply_override(raw: dict[str, Any], keys: list[str | int], value: Any) -> N
         node[last] = value
 
 
+def _unshared(node: Any) -> Any:
+    """A copy of parsed YAML in which no mapping or list is shared: each alias becomes a copy of its anchor's node
+    (``copy.deepcopy`` would keep the sharing)."""
+    if isinstance(node, dict):
+        return {k: _unshared(v) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_unshared(v) for v in node]
+    return node
+
+
 def _line_index(text: str) -> dict[tuple, int]:
     """Map key paths to 1-based line numbers by walking YAML's node tree (best effort)."""
     lines: dict[tuple, int] = {}
@@ -232,6 +242,7 @@ def load_world(source: str | Path, overrides: list[str] | tuple[str, ...] = ()) 
         raw = {}
     if not isinstance(raw, dict):
         raise WorldError(file, [WorldIssue("<top level>", raw, "a mapping of sections (sim, uavs, ...)", 1)])
+    raw = _unshared(raw)  # YAML aliases (&a ... *a) load as one shared object: an override must change one place
     lines = _line_index(text)
     issues: list[WorldIssue] = []
     for ov in overrides:

@@ -31,8 +31,8 @@ import numpy as np
 import shapely
 
 from autonomy.estimation.setmem import polygons as pg
-from autonomy.estimation.setmem.estimator import (SetEstimate, SetMembershipConfig, SetMembershipEstimator,
-                                                  free_search_area)
+from autonomy.estimation.setmem.estimator import SetMembershipConfig, SetMembershipEstimator, free_search_area
+from autonomy.fusion.set_team import fuse_team_sets
 from autonomy.guidance.search.planner import SearchConfig, SearchPlanner, yaw_quaternion
 from autonomy.guidance.search.regions import PrismViewRegion
 from autonomy.guidance.search.safety import LoiterSafety
@@ -263,15 +263,7 @@ class SearchMission:
             est.predict(t)
             est.update(out.extras["observed_region"], out.detections)
         links = line_of_sight_graph(self.uav_xy, self.obstacles)
-        shared = [e.shared for e in self.estimators]
-        fused: dict[tuple[int, ...], SetEstimate] = {}  # UAVs linked to the same UAVs fuse the same sets: once
-        for i, est in enumerate(self.estimators):
-            nbrs = np.flatnonzero(links[i]).tolist()
-            group = tuple(sorted({i, *nbrs}))
-            if group in fused:
-                est.adopt(fused[group])
-            else:
-                fused[group] = est.fuse([shared[j] for j in nbrs])
+        fuse_team_sets(self.estimators, links)
         return links
 
     def run(self) -> MissionResult:

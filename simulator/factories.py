@@ -13,8 +13,8 @@ from typing import Any
 from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
 from autonomy.guidance.waypoints import WaypointConfig, WaypointGuidance
 from simulator.plugins import load_plugin
-from worlds.schema import (BearingSpec, BoxSpec, CameraSpec, FormationSpec, FovSpec, ImmSpec, RadarSpec, UavSpec,
-                           World)
+from worlds.schema import (BearingSpec, BoxSpec, CameraSpec, FormationSpec, FovSpec, ImmSpec, RadarSpec, SearchSpec,
+                           UavSpec, World)
 
 __all__ = [
     "build_car_fleet",
@@ -75,14 +75,21 @@ ROAD_FALLBACK_FILTER = {"maekf": "ekf", "ecukf": "ukf"}
 """Unconstrained filter a road-constrained tracker starts tracks with and falls back to off the map."""
 
 
-def build_estimator(uav: UavSpec, index: int, network: Any = None) -> Any:
+def build_estimator(uav: UavSpec, index: int, network: Any = None, buildings: Any = ()) -> Any:
     """The UAV's target estimator: the built-in single-target tracker, a road-constrained tracker on ``network``
-    (the world's :class:`~worlds.roads.network.RoadNetwork`) for ``maekf``/``ecukf``, or a plugin class built with
-    ``params``."""
+    (the world's :class:`~worlds.roads.network.RoadNetwork`) for ``maekf``/``ecukf``, the set-membership tracker on
+    the search area less the ``buildings``' footprints, or a plugin class built with ``params``."""
     est = uav.autonomy.estimator
     if est.type == "plugin":
         cls = load_plugin(est.plugin, f"uavs[{index}].autonomy.estimator.plugin", ("step",))
         return cls(**est.params)
+    if est.type == "set_membership":
+        from autonomy.estimation.setmem.estimator import SetMembershipConfig
+        from autonomy.estimation.setmem.tracker import SetMembershipTracker
+
+        sm = est.set_membership  # required with this type: worlds.checks
+        config = SetMembershipConfig(max_target_speed=sm.max_target_speed, **est.params)
+        return SetMembershipTracker(config, search_free_area(sm.area, buildings), owner=index)
     if est.type in ROAD_FALLBACK_FILTER:
         from autonomy.estimation.road.config import RoadFilterConfig
         from autonomy.estimation.road.constraint import RoadConstraintParams
@@ -105,8 +112,17 @@ def build_estimator(uav: UavSpec, index: int, network: Any = None) -> Any:
     return SingleTargetTracker(TrackerConfig(**{**given, **est.params}))
 
 
-def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> Any:
-    """The UAV's guidance law from its world-file entry."""
+def search_free_area(area: tuple[float, float, float, float], buildings: Any) -> Any:
+    """``X_s`` of paper 004: the search ``area`` (x_min, y_min, x_max, y_max; m) less the building footprints."""
+    import shapely
+
+    from autonomy.estimation.setmem.estimator import free_search_area
+
+    return free_search_area(shapely.box(*area), buildings)
+
+
+def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any, estimator: Any = None) -> Any:
+    """The UAV's guidance law from its world-file entry (``estimator``: the UAV's own, which the search law reads)."""
     g = uav.autonomy.guidance
     if g.type == "plugin":
         cls = load_plugin(g.plugin, f"uavs[{index}].autonomy.guidance.plugin", ("command",))
@@ -128,6 +144,8 @@ def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any) -> 
         return NmpcStandoffGuidance(NmpcConfig(**common, **g.params), slot=index, buildings=buildings)
     if g.type == "formation":
         return _formation(uav, index, team_size)
+    if g.type == "search":
+        return _search(uav, buildings, estimator)
     if g.type == "fast_mpc":
         from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
 
@@ -152,6 +170,33 @@ def _formation(uav: UavSpec, index: int, team_size: int) -> Any:
                           altitude=g.altitude, altitude_gain=form.altitude_gain, geometry=form.geometry,
                           trail_fan=math.radians(form.trail_fan_deg), **g.params)
     return FormationGuidance(cfg, agent_id=index)
+
+
+def _search(uav: UavSpec, buildings: Any, estimator: Any) -> Any:
+    """Paper 004's search MPC over the UAV's own set-membership ``estimator`` (a
+    :class:`~autonomy.estimation.setmem.tracker.SetMembershipTracker`), seeing through the UAV's box sensor."""
+    import numpy as np
+
+    from autonomy.estimation.setmem.tracker import SetMembershipTracker
+    from autonomy.guidance.search.guidance import SetMembershipSearchGuidance
+    from autonomy.guidance.search.planner import SearchConfig, SearchPlanner
+    from autonomy.guidance.search.regions import PrismViewRegion
+    from autonomy.sensing.box_sensor import BoxSensorConfig
+
+    if not isinstance(estimator, SetMembershipTracker):
+        raise ValueError("guidance type 'search' plans on the UAV's own set_membership estimator, got "
+                         f"{type(estimator).__name__}")
+    g = uav.autonomy.guidance
+    spec = g.search if g.search is not None else SearchSpec()
+    given = _given(spec)
+    box = next(s for s in uav.sensors if isinstance(s, BoxSpec))  # worlds.checks
+    sensor = BoxSensorConfig(**_given(box, _COMMON | {"rate_hz", "latency_s"}))
+    config = SearchConfig(speed=g.speed, altitude=g.altitude, dt=1.0 / uav.autonomy.rate_hz,
+                          max_target_speed=estimator.estimator.config.max_target_speed, **given)
+    reach = np.sqrt(2.0) * (g.altitude - sensor.ground_z) * np.tan(sensor.opening_angle / 2)
+    planner = SearchPlanner(config, PrismViewRegion(sensor, buildings), estimator.estimator.free_area, buildings,
+                            footprint_radius=float(reach))
+    return SetMembershipSearchGuidance(planner, estimator.estimator)
 
 
 def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:

@@ -80,6 +80,7 @@ def check_world(world: World) -> list[WorldIssue]:
                                      "a road network in 'roads' for the vehicle to drive on"))
     issues.extend(_hcmci_issues(world))
     issues.extend(_formation_imm_issues(world))
+    issues.extend(_search_issues(world))
     uav_ids = {u.id for u in world.uavs} | {"base"}
     for i, o in enumerate(world.comms.outages):
         if o.end_s <= o.start_s:
@@ -175,4 +176,71 @@ def _formation_imm_issues(world: World) -> list[WorldIssue]:
         if (form is None or form.sigma_bearing_deg is None) and not any(s.type == "bearing" for s in uav.sensors):
             issues.append(WorldIssue(f"{where}.guidance.formation.sigma_bearing_deg", None,
                                      "a bearing noise σ in degrees: this UAV has no bearing sensor to take it from"))
+    return issues
+
+
+def _search_issues(world: World) -> list[WorldIssue]:
+    """Paper 004's pieces: the ``set_membership`` estimator (its ``set_membership`` block; a ``box`` sensor scanning at
+    the agent's rate, so that each step corrects with one scan and the team fuses sets of one time; one search area,
+    speed bound and rate for the whole team; a speed bound no street lets a car exceed), ``sets`` fusion and
+    ``search`` guidance (both on that estimator)."""
+    issues: list[WorldIssue] = []
+    first = None
+    for i, uav in enumerate(world.uavs):
+        where = f"uavs[{i}].autonomy"
+        est, fusion, g = uav.autonomy.estimator, uav.autonomy.fusion, uav.autonomy.guidance
+        sets = est.type == "set_membership"
+        if est.set_membership is not None and not sets:
+            issues.append(WorldIssue(f"{where}.estimator.set_membership", est.set_membership.model_dump(),
+                                     f"no 'set_membership' settings unless the type is set_membership (type is "
+                                     f"{est.type!r})"))
+        if g.search is not None and g.type != "search":
+            issues.append(WorldIssue(f"{where}.guidance.search", g.search.model_dump(),
+                                     f"no 'search' settings unless the type is search (type is {g.type!r})"))
+        if not sets:
+            for key, value, alternative in ((f"{where}.fusion.method", fusion.method, "sets"),
+                                            (f"{where}.guidance.type", g.type, "search")):
+                if value == alternative:
+                    issues.append(WorldIssue(key, value, f"another choice, or estimator type set_membership: "
+                                                         f"{value!r} works on that estimator's sets (the estimator "
+                                                         f"type is {est.type!r})"))
+            continue
+        if fusion.method not in ("none", "sets"):
+            issues.append(WorldIssue(f"{where}.fusion.method", fusion.method,
+                                     "'sets' or 'none': the set_membership estimator shares sets, not a point "
+                                     "estimate"))
+        if est.set_membership is None:
+            issues.append(WorldIssue(f"{where}.estimator.set_membership", None,
+                                     "the search area and the targets' speed bound: {area: [x_min, y_min, x_max, "
+                                     "y_max], max_target_speed: ...}"))
+            continue
+        boxes = [j for j, s in enumerate(uav.sensors) if s.type == "box"]
+        if not boxes:
+            issues.append(WorldIssue(f"uavs[{i}].sensors", [s.type for s in uav.sensors],
+                                     "a box sensor: the set_membership estimator corrects with its observed "
+                                     "regions and bounded-error detections"))
+        for j in boxes:
+            if uav.sensors[j].rate_hz != uav.autonomy.rate_hz:
+                issues.append(WorldIssue(f"uavs[{i}].sensors[{j}].rate_hz", uav.sensors[j].rate_hz,
+                                         f"the agent's rate_hz ({uav.autonomy.rate_hz:g}): the set_membership "
+                                         "estimator corrects with one scan per step"))
+        sm = est.set_membership
+        key = (sm.area, sm.max_target_speed, uav.autonomy.rate_hz)
+        if first is None:
+            first = (i, key)
+        elif key != first[1]:
+            k = first[0]
+            issues.append(WorldIssue(f"{where}.estimator.set_membership",
+                                     {"area": list(sm.area), "max_target_speed": sm.max_target_speed,
+                                      "rate_hz": uav.autonomy.rate_hz},
+                                     f"the area, max_target_speed and agent rate_hz of uavs[{k}]: the team fuses "
+                                     "sets of one area, one speed bound and one time"))
+        if world.ground_vehicles and world.roads.streets:
+            fastest = max(range(len(world.roads.streets)), key=lambda m: world.roads.streets[m].speed_limit)
+            limit = world.roads.streets[fastest].speed_limit
+            if sm.max_target_speed < limit:
+                issues.append(WorldIssue(f"{where}.estimator.set_membership.max_target_speed", sm.max_target_speed,
+                                         f"at least the fastest street's speed limit ({limit:g} m/s, "
+                                         f"roads.streets[{fastest}]): the sets hold the targets only if none "
+                                         "moves faster than the bound"))
     return issues

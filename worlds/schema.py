@@ -34,7 +34,9 @@ __all__ = [
     "RenderSection",
     "RoadsSection",
     "RouteSpec",
+    "SearchSpec",
     "SensorSpec",
+    "SetMembershipSpec",
     "SimSection",
     "StreetSpec",
     "TerrainSection",
@@ -261,13 +263,32 @@ class ImmSpec(Strict):
     p_stay: float = Field(0.95, gt=0, lt=1, description="diagonal of the mode-transition matrix")
 
 
+class SetMembershipSpec(Strict):
+    """Paper 004's set-membership estimator (``autonomy.estimation.setmem``): the search area it keeps its sets in
+    (the area less the buildings' footprints is ``X_s``) and the targets' speed bound behind its guarantee; the
+    estimator's numerical settings (``quad_segs``, ``simplify_tol``, ``max_vertices``, ``max_hole_area``) go in the
+    estimator's ``params``."""
+
+    area: tuple[float, float, float, float] = Field(description="search area x_min, y_min, x_max, y_max, m")
+    max_target_speed: PositiveFloat = Field(5.0 / 3.6, description="bound on every target's ground speed, m/s "
+                                                                   "(the paper's 5 km/h)")
+
+    @model_validator(mode="after")
+    def _box(self) -> SetMembershipSpec:
+        x0, y0, x1, y1 = self.area
+        if not (x1 > x0 and y1 > y0):
+            raise ValueError(f"area must be [x_min, y_min, x_max, y_max] with max > min, got {list(self.area)}")
+        return self
+
+
 class EstimatorSpec(Strict):
     """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or paper
     003's ``imm`` (CV + CT ±ω EKFs; model ``cv``), a road-constrained tracker (paper 002: ``maekf``
     pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on the world's road map, with junction hypotheses and
-    an unconstrained fallback off the map), or a user plugin."""
+    an unconstrained fallback off the map), paper 004's ``set_membership`` estimator (sets that hold every target,
+    from a bounded-error ``box`` sensor; settings in ``set_membership``), or a user plugin."""
 
-    type: Literal["ekf", "ukf", "ckf", "scif", "imm", "maekf", "ecukf", "plugin"] = "ekf"
+    type: Literal["ekf", "ukf", "ckf", "scif", "imm", "maekf", "ecukf", "set_membership", "plugin"] = "ekf"
     model: Literal["cv", "singer"] = "cv"
     plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
     params: dict[str, Any] = Field(default_factory=dict,
@@ -275,6 +296,8 @@ class EstimatorSpec(Strict):
     road: dict[str, Any] = Field(default_factory=dict,
                                  description="maekf/ecukf: RoadFilterConfig fields (autonomy.estimation.road.config)")
     imm: ImmSpec | None = Field(None, description="imm: the mode set's settings (None: the defaults)")
+    set_membership: SetMembershipSpec | None = Field(None, description="set_membership: the search area and the "
+                                                                       "targets' speed bound")
 
     @model_validator(mode="after")
     def _plugin(self) -> EstimatorSpec:
@@ -308,8 +331,38 @@ class FormationSpec(Strict):
     trail_fan_deg: float = Field(15.0, gt=0, le=90, description="half-angle of the trailing fan, deg")
 
 
+class SearchSpec(Strict):
+    """Paper 004's sequential one-step search MPC (``autonomy.guidance.search.planner.SearchConfig``): constant speed
+    and altitude (the guidance ``speed`` and ``altitude``), one heading change per agent step (the step ``T`` is the
+    agent's period), chosen on a grid to shrink the predicted sets; the search area and the targets' speed bound are
+    the UAV's ``set_membership`` estimator's."""
+
+    max_turn_deg: float = Field(45.0, gt=0, le=180, description="bound on the heading change per step, deg")
+    n_controls: int = Field(7, ge=3, description="grid of heading changes, odd")
+    horizon: int = Field(2, ge=1, description="steps the held heading change is rolled out over")
+    alpha_m: NonNegFloat = Field(1.3, description="weight of the undetected set's area")
+    alpha_d: NonNegFloat = Field(4.5, description="weight of the pull towards the nearest large set")
+    alpha_s: NonNegFloat = Field(3500.0, description="weight of the obstacle risk")
+    alpha_s1: float = Field(10.0, description="centre of the obstacle-risk transition, m")
+    alpha_s2: PositiveFloat = Field(3.0, description="width of the obstacle-risk transition, m")
+    d_col: NonNegFloat = Field(5.0, description="distance to an obstacle counted as a collision, m")
+    loiter_safety: bool = Field(True, description="admit only turns after which a maximum-turn loiter stays clear "
+                                                  "of the obstacles (beyond the paper)")
+    clearance_margin: NonNegFloat = Field(1.0, description="margin over d_col the safe loiters keep, m: must cover "
+                                                           "the quadrotor's deviation from the planned chords")
+    tail_steps: int = Field(0, ge=0, description="steps the leftover sets grow before they are measured (0: paper)")
+    altitude_gain: NonNegFloat = Field(1.0, description="vertical speed per metre of altitude error, 1/s")
+
+    @field_validator("n_controls")
+    @classmethod
+    def _odd(cls, value: int) -> int:
+        if value % 2 == 0:
+            raise ValueError(f"an odd number (so that 0 is on the grid), got {value}")
+        return value
+
+
 class GuidanceSpec(Strict):
-    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "plugin"] = "hold"
+    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "search", "plugin"] = "hold"
     plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
     standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
     speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
@@ -318,6 +371,7 @@ class GuidanceSpec(Strict):
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="further fields of the law's config, or keyword arguments of a plugin")
     formation: FormationSpec | None = Field(None, description="type formation: its settings (None: the defaults)")
+    search: SearchSpec | None = Field(None, description="type search: its settings (None: the defaults)")
 
     @model_validator(mode="after")
     def _plugin(self) -> GuidanceSpec:
@@ -331,11 +385,13 @@ class FusionSpec(Strict):
     """Fusion across the team: track-to-track fusion of the teammates' shared estimates (``convex``,
     ``covariance_intersection``: ``autonomy.fusion.track_fusion``), HCMCI consensus on information (``hcmci``:
     ``autonomy.fusion.hcmci_team``; needs the ``scif`` estimator; the UAVs due at a tick fuse as a team over the radio
-    links that are up), or raw measurement sharing (``measurements``: ``autonomy.fusion.measurement_sharing``; every
+    links that are up), raw measurement sharing (``measurements``: ``autonomy.fusion.measurement_sharing``; every
     teammate's detections reach this UAV over the radio, and its tracker stacks them with its own per scan time:
-    paper 003's centralised augmented measurement)."""
+    paper 003's centralised augmented measurement), or set fusion (``sets``: ``autonomy.fusion.set_team``; needs the
+    ``set_membership`` estimator; the UAVs due at a tick fuse their sets with the teammates their links reach, paper
+    004's fusion over lines of sight with ``comms.block_by_buildings``)."""
 
-    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements"] = "none"
+    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements", "sets"] = "none"
     max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
     q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
     rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")
@@ -396,7 +452,9 @@ class CommsSection(Strict):
     c: PositiveFloat | None = None
     alpha: PositiveFloat | None = None
     max_range: PositiveFloat | None = Field(None, description="hard range limit, m")
-    block_by_buildings: bool | None = Field(None, description="no link through a building (line of sight)")
+    block_by_buildings: bool | None = Field(None, description="no link through a building (line of sight); under "
+                                                              "perfect comms it shapes the graph of the team fusions "
+                                                              "(hcmci, sets)")
     latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
     base_station: Vec3 | None = None
     links: list[tuple[str, str]] | None = Field(
@@ -419,10 +477,17 @@ class RenderSection(Strict):
 
 
 class DecoySpec(Strict):
+    """A static object that looks like a target to every sensor, except that a bounded-error ``box`` sensor detects it
+    only from inside its visibility cone (paper 004): vertex at the decoy, axis at azimuth ``yaw_deg`` tilted
+    ``tilt_deg`` from the vertical, half aperture ``cone_half_angle_deg``. The paper draws the aperture 2λ in
+    [12°, 36°] and tilts the axis by the aperture (``tilt_deg`` left out = twice the half-angle)."""
+
     id: str
-    position: Vec3 = Field(description="m")
-    yaw_deg: float = Field(0.0, description="direction the decoy is visible from (axis of its visibility cone)")
+    position: Vec3 = Field(description="centre of the decoy's body, m")
+    yaw_deg: float = Field(0.0, description="azimuth of the visibility cone's axis, and heading of the body, deg")
     cone_half_angle_deg: float = Field(45.0, gt=0, le=180, description="half-angle of the visibility cone")
+    tilt_deg: float | None = Field(None, ge=0, le=180, description="angle of the cone's axis from the vertical, deg "
+                                                                   "(None: twice the half-angle, the paper's cones)")
 
 
 class World(Strict):

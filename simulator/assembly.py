@@ -11,6 +11,7 @@ import numpy as np
 import pybullet as p
 
 from autonomy.agent import Agent
+from autonomy.estimation.setmem.tracker import SetMembershipTracker
 from autonomy.estimation.tracker import SingleTargetTracker
 from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam
 from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
@@ -23,10 +24,12 @@ from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
+from simulator.decoys import StaticDecoys, build_decoys
 from simulator.factories import build_estimator, build_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery
+from simulator.search_team import SearchTeamRun
 from simulator.seeding import RunSeeds
 from vehicles.quadrotor.commands import UnicycleCommand, VelocityCommand
 from worlds.build import build_geometry
@@ -57,6 +60,8 @@ class AgentSlot:
     divisor: int
     hcmci: bool = False  # estimates as a member of the HCMCI consensus team
     measurements: bool = False  # takes the teammates' detections (fusion method measurements)
+    search: bool = False  # a set-membership searcher: steps with the search team
+    fuse_sets: bool = False  # ... and fuses its sets with the teammates it is linked to (fusion method sets)
 
 
 @dataclass
@@ -95,14 +100,28 @@ class Assembly:
     consensus_links: list[int] = field(default_factory=list)  # per team step: links up between nodes with a track
     wall_s: dict[str, float] = field(default_factory=lambda: dict.fromkeys(WALL_PHASES, 0.0))  # wall time per phase
     shared_received: dict[int, int] = field(default_factory=dict)  # per UAV: teammates' detections delivered to it
+    decoys: StaticDecoys | None = None
+    search: SearchTeamRun | None = None
 
     # -- truth ---------------------------------------------------------------------------------------------------
     def target_truth(self) -> TargetTruth:
-        if self.cars is None:
+        """The ground vehicles, then the static decoys (rows ``len(car_ids) + k``; cars' cone rows are unused)."""
+        if self.cars is None and self.decoys is None:
             return TargetTruth.empty()
-        st = self.cars.state
-        return TargetTruth(ids=np.arange(len(self.car_ids)), p_W=st.p_W, v_W=st.v_W, kind=self.car_kinds,
-                           yaw=np.asarray(st.yaw), seg_ids=np.asarray(self.cars.body_ids))
+        if self.cars is None:
+            p, v, yaw, kinds, segs = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), (), np.zeros(0, int)
+        else:
+            st = self.cars.state
+            p, v, yaw, kinds, segs = st.p_W, st.v_W, np.asarray(st.yaw), self.car_kinds, np.asarray(self.cars.body_ids)
+        if self.decoys is None:
+            return TargetTruth(ids=np.arange(len(kinds)), p_W=p, v_W=v, kind=kinds, yaw=yaw, seg_ids=segs)
+        d, n = self.decoys, len(kinds)
+        return TargetTruth(ids=np.arange(n + len(d)), p_W=np.vstack([p, d.p_W]),
+                           v_W=np.vstack([v, np.zeros((len(d), 3))]), kind=(*kinds, *("decoy",) * len(d)),
+                           yaw=np.concatenate([yaw, d.yaw]),
+                           cone_axis_W=np.vstack([np.tile([0.0, 0.0, 1.0], (n, 1)), d.cone_axis_W]),
+                           cone_half_angle=np.concatenate([np.full(n, np.pi), d.cone_half_angle]),
+                           seg_ids=np.concatenate([segs, d.body_ids]))
 
     def own_state(self, i: int, t: float) -> OwnState:
         st = self.quads.state
@@ -184,12 +203,19 @@ class Assembly:
     def links_up(self, uavs: list[int], tick: int) -> np.ndarray:
         """(n, n) bool: which links between ``uavs`` (indices) are up at ``tick``. Radio: one erasure draw per link
         (fixed topology, range, blockage and outages included); perfect comms: the pairs of ``comms.links`` (every
-        pair without it) less the scheduled outages."""
+        pair without it) less the scheduled outages, and less the pairs a building stands between when
+        ``comms.block_by_buildings``."""
         ids = [self.uav_ids[j] for j in uavs]
         if self.channel is not None:
             st = self.quads.state
             return self.channel.sample_links(ids, {u: st.p_W[j] for u, j in zip(ids, uavs, strict=True)}, tick)
-        return scheduled_links(ids, self.world_spec.comms.links, self._outage_ticks, tick)
+        up = scheduled_links(ids, self.world_spec.comms.links, self._outage_ticks, tick)
+        if self.world_spec.comms.block_by_buildings and len(uavs) > 1:
+            p_W = self.quads.state.p_W[uavs]
+            iu, ju = np.triu_indices(len(uavs), k=1)
+            clear = np.asarray(self.scene_query.line_of_sight(p_W[iu], p_W[ju]), dtype=bool)
+            up[iu[~clear], ju[~clear]] = up[ju[~clear], iu[~clear]] = False
+        return up
 
     def _team_step(self, t: float, tick: int, slots: list[AgentSlot]) -> dict[int, tuple[Any, int]]:
         """Estimation of the HCMCI agents due at ``tick``, as one team: each UAV's (estimate, detections used)."""
@@ -237,17 +263,22 @@ class Assembly:
                 for a in self.agents:
                     if a.uav == slot.uav:
                         a.agent.receive(out.detections)
+                if self.search is not None:
+                    self.search.on_scan(slot.uav, t, slot.sensor.latency_s, out)
                 self._share_detections(slot.uav, list(out.detections), t, tick)
         t4 = clock()
         wall["sensors"] += t4 - t3
         agents = [a for a in self.agents if tick % a.divisor == 0]
         team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
-        for a in agents:                                                  # then every agent fuses and plans
+        searched = self.search.step(self, t, tick, [a for a in agents if a.search]) if self.search else {}
+        for a in agents:  # the search team runs its whole step; then every other agent fuses and plans
             if self.channel is not None:
                 self._broadcast_state(a.uav, t, tick)
             mates, shared = self.inbox(a.uav, t, tick)
             own = self.own_state(a.uav, t)
-            if a.uav in team:
+            if a.uav in searched:
+                result = searched[a.uav]
+            elif a.uav in team:
                 result = a.agent.act(t, own, mates, *team[a.uav])
             else:
                 result = a.agent.step(t, own, mates, shared if a.agent.fusion is not None else ())
@@ -426,21 +457,22 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
             estimator = options.estimator_factory(i, u)
         else:
             estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator", u.autonomy.estimator,
-                                 lambda: build_estimator(u, i, geometry.network))
+                                 lambda: build_estimator(u, i, geometry.network, geometry.buildings))
         if options.guidance_factory is not None:
             guidance = options.guidance_factory(i, u)
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
-                                lambda: build_guidance(u, i, len(world.uavs), geometry.buildings))
+                                lambda: build_guidance(u, i, len(world.uavs), geometry.buildings, estimator))
         fusion, f = None, u.autonomy.fusion
         if f.method == "hcmci":
             _check_consensus_estimator(loaded, i, estimator)
             team = HcmciTeam(HcmciConfig(rounds=f.rounds, gain=f.b))  # one config for all: worlds.checks
-        elif f.method not in ("none", "measurements"):
+        elif f.method not in ("none", "measurements", "sets"):
             fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz"),
-                                hcmci=f.method == "hcmci", measurements=f.method == "measurements"))
+                                hcmci=f.method == "hcmci", measurements=f.method == "measurements",
+                                search=isinstance(estimator, SetMembershipTracker), fuse_sets=f.method == "sets"))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents,
                     hcmci=team)
 
@@ -494,6 +526,7 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     car_ids = [g.id for g in world.ground_vehicles]
     uav_ids = [u.id for u in world.uavs]
     target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]
+    decoys = build_decoys(world.decoys, scene, CAR_RGBA)
     query = PybulletSceneQuery(scene.client, scene.occluders)
     outage_ticks = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     return Assembly(clock=clock, scene=scene, recorder=recorder, buildings=geometry.buildings,
@@ -504,4 +537,22 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
                     channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
                     _outage_ticks=outage_ticks, hcmci=prep.hcmci,
                     _sharing=any(a.agent.fusion is not None for a in prep.agents),
-                    record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))
+                    record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"), decoys=decoys,
+                    search=_search_team(prep.agents, car_ids, target_ids, car_kinds, decoys))
+
+
+def _search_team(agents: list[AgentSlot], car_ids: list[str], target_ids: list[str], car_kinds: tuple[str, ...],
+                 decoys: StaticDecoys | None) -> SearchTeamRun | None:
+    """The search team of the set-membership agents, judged on the target rows of the truth (the tracked vehicles)
+    and its decoy rows (vehicles of role decoy, then the static decoys); None without such agents."""
+    members = [a for a in agents if a.search]
+    if not members:
+        return None
+    n = len(car_ids)
+    team = SearchTeamRun(members=[a.uav for a in members],
+                         fusing={a.uav for a in members if a.fuse_sets},
+                         target_rows=[car_ids.index(t) for t in target_ids],
+                         decoy_rows=[k for k in range(n) if car_kinds[k] == "decoy"]
+                         + list(range(n, n + (len(decoys) if decoys is not None else 0))))
+    team.attach(members)
+    return team

@@ -5,7 +5,9 @@
 - ``plots/altitude.png``: UAV altitudes over time;
 - ``plots/standoff.png``: with standoff guidance, each UAV's standoff-distance error and the team's phase-keeping error
   over time (paper 002's Table III quantities, :mod:`autonomy.metrics.standoff`);
-- ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model.
+- ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model;
+- ``plots/search.png``: with a set-membership search team, the set areas over time and the sets on the map
+  (:mod:`simulator.plots_search`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from simulator.plots_search import search_plot
 from simulator.runrecord import RunRecord, load_run
 
 __all__ = ["write_geometry", "write_plots"]
@@ -129,7 +132,7 @@ def write_plots(run_dir: str | Path) -> list[Path]:
         fig.savefig(written[-1])
         plt.close(fig)
     world = _world(run_dir)
-    for draw in (_standoff_plot, _links_plot):
+    for draw in (_standoff_plot, _links_plot, search_plot):
         path = draw(plt, rec, world, plots)
         if path is not None:
             written.append(path)

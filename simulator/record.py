@@ -101,6 +101,7 @@ class RunRecorder:
                 part.unlink()
         self._events = open(self.out_dir / "events.jsonl", "a", encoding="utf-8", buffering=1)
         self._streams: dict[str, _Stream] = {}
+        self._lines: set[str] = set()  # files of append_line this record has started
         self.event_counts: dict[str, int] = {}
         self.closed = False
 
@@ -113,6 +114,14 @@ class RunRecorder:
 
     def write_json(self, name: str, data: Any) -> Path:
         return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+
+    def append_line(self, name: str, data: Any) -> None:
+        """Append ``data`` as one JSON line to the file ``name`` (written at once; replaced with a new record)."""
+        path = self.out_dir / name
+        mode = "a" if name in self._lines else "w"
+        self._lines.add(name)
+        with open(path, mode, encoding="utf-8") as f:
+            f.write(json.dumps(data, default=json_default) + "\n")
 
     # -- events ----------------------------------------------------------------------------------------------------
     def event(self, type: str, tick: int | None = None, t: float | None = None, /, **fields: Any) -> None:

@@ -203,6 +203,15 @@ class Scene:
         vis = p.createVisualShape(p.GEOM_MESH, vertices=verts, indices=idx, rgbaColor=list(rgba), physicsClientId=c)
         return p.createMultiBody(0, col, vis, physicsClientId=c)
 
+    def add_static_box(self, centre: Sequence[float], size: Sequence[float], yaw: float, rgba: Sequence[float]) -> int:
+        """Add one static box: centre (m), full size (length, width, height; m), heading ``yaw`` (rad)."""
+        c = self.client
+        half = [s / 2 for s in size]
+        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=c)
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=list(rgba), physicsClientId=c)
+        return p.createMultiBody(0, col, vis, basePosition=list(centre),
+                                 baseOrientation=p.getQuaternionFromEuler([0.0, 0.0, float(yaw)]), physicsClientId=c)
+
     def add_road_surface(self, mesh: trimesh.Trimesh) -> int:
         """Add the road surface (visual only: cars drive on the ground plane's collision)."""
         self.road_id = self.add_static_mesh(mesh, ROAD_RGBA, collision=False)

@@ -9,6 +9,9 @@
   not only with itself);
 - ``consensus`` (HCMCI worlds): ``team_steps`` and ``active_links_mean`` (links up between nodes that hold a track,
   averaged over the team steps);
+- ``search`` (set-membership search teams, paper 004): the guarantee rate and violations (true targets outside
+  ``X ∪ X̄``), the team-mean normalised areas at the end, the step at which ``X̄`` emptied, the steps with a decoy in
+  ``X``, decisions without a safe candidate (:meth:`simulator.search_team.SearchTeamRun.summary`);
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses; under HCMCI the UAV's
@@ -72,6 +75,8 @@ class MetricsTracker:
             p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
             slots = _slots_by_uav(asm)
             for i in due:
+                if slots[i].search:  # a set-membership searcher holds sets, not a point estimate
+                    continue
                 self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
                 if slots[i].agent.fusion is not None:
                     self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
@@ -144,6 +149,8 @@ class MetricsTracker:
             out["consensus"] = {"team_steps": asm.hcmci.steps,
                                 "active_links_mean": float(np.mean(asm.consensus_links)) if asm.consensus_links
                                 else None}
+        if getattr(asm, "search", None) is not None:
+            out["search"] = asm.search.summary()
         if asm.channel is not None:
             cs = asm.channel.stats
             out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,

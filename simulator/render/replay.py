@@ -136,6 +136,8 @@ class Replayer:
         self.geometry = load_geometry(self.run_dir / "geometry.npz")
         self.uav_span = 2.0 * _arm_length(uavs[0].get("airframe") if uavs else None) * cfg.uav_scale  # tip to tip, m
         self._sizes = sizes
+        self._decoys = [(_car_size("sedan"), d["position"], np.radians(float(d.get("yaw_deg", 0.0))))
+                        for d in world.get("decoys") or []]
         self.layout = self._layout()
         self.stage = self._choose_stage()
         self.regards = radar_regards(world)
@@ -184,7 +186,8 @@ class Replayer:
         return float(lo[0] - m), float(hi[0] + m), float(lo[1] - m), float(hi[1] + m)
 
     def _new_stage(self, egl: bool) -> Stage:
-        return Stage(self.geometry, len(self.uav_index), self._sizes, self.uav_span, use_egl=egl)
+        return Stage(self.geometry, len(self.uav_index), self._sizes, self.uav_span, use_egl=egl,
+                     decoys=self._decoys)
 
     def _choose_stage(self) -> Stage:
         want = self.config.renderer

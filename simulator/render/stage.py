@@ -158,10 +158,13 @@ class Stage:
         Render with the EGL plugin (falls back to TinyRenderer when it does not load).
     road_half_width : float
         Half width of the road strips drawn around each centre-line, m.
+    decoys : sequence of (size (3,), centre (3,), yaw)
+        Static decoys (the world's ``decoys``): boxes in the car colour, m and rad.
     """
 
     def __init__(self, geometry: StaticGeometry, n_uavs: int, car_sizes: Sequence[Sequence[float]],
-                 uav_span: float, use_egl: bool, road_half_width: float = 3.5) -> None:
+                 uav_span: float, use_egl: bool, road_half_width: float = 3.5,
+                 decoys: Sequence[tuple[Sequence[float], Sequence[float], float]] = ()) -> None:
         self.scene = Scene.create(SceneConfig())
         c = self.client = self.scene.client
         # the ground is painted per pixel (see ground_mask): its one huge polygon costs either renderer more than
@@ -192,6 +195,11 @@ class Stage:
             vis = p.createVisualShape(p.GEOM_BOX, halfExtents=[s / 2.0 for s in size], rgbaColor=list(CAR_RGBA),
                                       physicsClientId=c)
             self.vehicle_ids.append(p.createMultiBody(0, -1, vis, basePosition=[0, 0, -50], physicsClientId=c))
+        for size, pos, yaw in decoys:  # static, shaped and painted like the cars they imitate
+            vis = p.createVisualShape(p.GEOM_BOX, halfExtents=[s / 2.0 for s in size], rgbaColor=list(CAR_RGBA),
+                                      physicsClientId=c)
+            p.createMultiBody(0, -1, vis, basePosition=list(map(float, pos)),
+                              baseOrientation=p.getQuaternionFromEuler([0.0, 0.0, float(yaw)]), physicsClientId=c)
 
     @property
     def renderer_name(self) -> str:

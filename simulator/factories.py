@@ -186,9 +186,11 @@ def _search(uav: UavSpec, buildings: Any, estimator: Any) -> Any:
     if not isinstance(estimator, SetMembershipTracker):
         raise ValueError("guidance type 'search' plans on the UAV's own set_membership estimator, got "
                          f"{type(estimator).__name__}")
+    from vehicles.quadrotor.airframes import load_airframe
+
     g = uav.autonomy.guidance
     spec = g.search if g.search is not None else SearchSpec()
-    given = _given(spec)
+    given = _given(spec, {"velocity_lag_s"})
     box = next(s for s in uav.sensors if isinstance(s, BoxSpec))  # worlds.checks
     sensor = BoxSensorConfig(**_given(box, _COMMON | {"rate_hz", "latency_s"}))
     config = SearchConfig(speed=g.speed, altitude=g.altitude, dt=1.0 / uav.autonomy.rate_hz,
@@ -196,7 +198,8 @@ def _search(uav: UavSpec, buildings: Any, estimator: Any) -> Any:
     reach = np.sqrt(2.0) * (g.altitude - sensor.ground_z) * np.tan(sensor.opening_angle / 2)
     planner = SearchPlanner(config, PrismViewRegion(sensor, buildings), estimator.estimator.free_area, buildings,
                             footprint_radius=float(reach))
-    return SetMembershipSearchGuidance(planner, estimator.estimator)
+    return SetMembershipSearchGuidance(planner, estimator.estimator, lag_s=spec.velocity_lag_s,
+                                       max_speed=load_airframe(uav.airframe).max_speed)
 
 
 def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:

@@ -352,6 +352,9 @@ class SearchSpec(Strict):
                                                            "the quadrotor's deviation from the planned chords")
     tail_steps: int = Field(0, ge=0, description="steps the leftover sets grow before they are measured (0: paper)")
     altitude_gain: NonNegFloat = Field(1.0, description="vertical speed per metre of altitude error, 1/s")
+    velocity_lag_s: NonNegFloat = Field(0.0, description="time constant of the UAV's velocity response, s, that the "
+                                                         "set-points compensate so that the UAV ends each step where "
+                                                         "the planner's chord does (0: none)")
 
     @field_validator("n_controls")
     @classmethod

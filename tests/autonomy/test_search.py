@@ -151,6 +151,40 @@ def test_guidance_command_and_shared_plan():
     assert g.stats.calls == 1 and len(g.stats.solve_times_s) == 1
 
 
+@pytest.mark.parametrize("u_deg", [0.0, 10.0, -20.0])
+def test_lag_compensated_setpoint_ends_the_step_on_the_chord(u_deg):
+    """A first-order velocity lag (tau) driven by the compensated set-point for one step moves the UAV by exactly the
+    planner's chord V T (cos(psi + u), sin(psi + u)), from a velocity along the old heading; without compensation
+    it falls short of a turn."""
+    est = SetMembershipEstimator(SetMembershipConfig(), AREA)
+    tau, T = 0.5, CFG.dt
+    own = OwnState(t=3.0, p_W=np.array([250.0, 100.0, 100.0]), v_W=np.array([0.0, CFG.speed, 0.0]), yaw=np.pi / 2)
+
+    def step(g):
+        g.planner.decide = lambda p, h, e, d: _decision_with(np.radians(u_deg), p, h)
+        v_c = g.command(own, None, [], 3.0).v_W[:2]
+        t = np.linspace(0.0, T, 2001)  # v(t) = v_c + (v0 - v_c) exp(-t / tau), integrated by trapezoids
+        v = v_c[None] + (own.v_W[:2] - v_c)[None] * np.exp(-t / tau)[:, None]
+        return np.trapezoid(v, t, axis=0), v_c
+
+    chord = CFG.speed * T * np.array([np.cos(np.pi / 2 + np.radians(u_deg)), np.sin(np.pi / 2 + np.radians(u_deg))])
+    moved, v_c = step(SetMembershipSearchGuidance(planner(), est, lag_s=tau))
+    np.testing.assert_allclose(moved, chord, atol=1e-5)
+    assert np.hypot(*v_c) >= CFG.speed - 1e-9
+    plain, _ = step(SetMembershipSearchGuidance(planner(), est))
+    assert np.hypot(*(plain - chord)) > (0.0 if u_deg == 0 else 0.5) - 1e-9
+    capped = SetMembershipSearchGuidance(planner(), est, lag_s=tau, max_speed=CFG.speed)
+    assert np.hypot(*step(capped)[1]) <= CFG.speed + 1e-9
+
+
+def _decision_with(u, p, heading):
+    from autonomy.guidance.search.planner import SearchDecision, rollout
+
+    path = rollout(np.asarray(p, float), heading, u, CFG)
+    return SearchDecision(u=u, path=path, cost=0.0, terms={}, costs=np.zeros(1), controls=np.array([u]),
+                          admissible=np.ones(1, bool))
+
+
 SMALL = dict(area_size=(250.0, 250.0), n_uavs=3, n_targets=2, n_decoys=2, n_obstacles=2,
              obstacle_sides=(20.0, 40.0), steps=80)
 

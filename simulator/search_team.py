@@ -14,14 +14,16 @@ team when their agents are due (they share one rate, :mod:`worlds.checks`):
    :class:`~autonomy.guidance.types.TeammateState` with ``plan_p_W``, stamped now), as the paper's sequential MPC;
 4. one row per UAV of the ``search`` stream: the normalised areas of ``X`` and ``X̄``, how many true targets lie in
    ``X ∪ X̄`` (the guarantee, checked against the physics truth), how many decoys lie in ``X``, the neighbours fused,
-   and whether the decision was safe (:class:`~autonomy.guidance.search.planner.SearchDecision`); every
+   whether the decision was safe (:class:`~autonomy.guidance.search.planner.SearchDecision`), the heading change
+   ``u`` and the model's next position (``plan_x``, ``plan_y``: the chord's end), and ``deviation``, how far the UAV
+   ended this step from where its last decision's chord put it (the physical UAV against the planner's model); every
    :data:`SNAPSHOT_EVERY` steps, each UAV's sets as one line of ``search_sets.jsonl`` (rounded to 0.1 m: for plots,
    not for the guarantee).
 
 :meth:`SearchTeamRun.summary` gives the run's figures for ``metrics.json``: the guarantee rate and its violations,
 the team-mean areas at the end, the first step at which the team-mean ``φ(X̄)/φ(X_s)`` fell below
-:data:`EMPTY_FRACTION`, the steps with a decoy inside some UAV's ``X``, and the decisions taken without a safe
-candidate.
+:data:`EMPTY_FRACTION`, the steps with a decoy inside some UAV's ``X``, the decisions taken without a safe
+candidate, and the median, 95th percentile and largest ``deviation`` (m).
 """
 
 from __future__ import annotations
@@ -71,7 +73,9 @@ class SearchTeamRun:
     unsafe: int = 0
     xbar_empty_step: int | None = None
     last_areas: tuple[float, float] | None = None
+    deviations: list[float] = field(default_factory=list)
     _trackers: dict[int, Any] = field(default_factory=dict)
+    _planned: dict[int, np.ndarray] = field(default_factory=dict)
 
     def attach(self, slots: Sequence[Any]) -> None:
         """Take each member's tracker from its agent slot."""
@@ -135,10 +139,19 @@ class SearchTeamRun:
             decoy_seen |= bool(decoys.any())
             safe = True if decision is None else bool(decision.safe)
             self.unsafe += not safe
+            p_now = asm.own_state(a.uav, t).p_W[:2]
+            deviation = np.nan
+            if a.uav in self._planned:
+                deviation = float(np.hypot(*(p_now - self._planned[a.uav])))
+                self.deviations.append(deviation)
+            plan = np.full(2, np.nan) if decision is None else decision.path.p_xy[0]
+            self._planned[a.uav] = plan
             asm.recorder.append("search", tick=tick, t=t, uav=a.uav, area_X=aX, area_Xbar=aXb,
                                 targets_inside=int(inside.sum()), targets=int(inside.size),
                                 decoys_in_X=int(decoys.sum()), fused_with=int(fused[k]), links=int(links[k].sum()),
                                 safe=safe, clearance=np.nan if decision is None else float(decision.clearance),
+                                u=np.nan if decision is None else float(decision.u), plan_x=plan[0], plan_y=plan[1],
+                                deviation=deviation,
                                 vertices_X=_vertices(sets.X), vertices_Xbar=_vertices(sets.Xbar))
         self.steps += 1
         if self.steps % SNAPSHOT_EVERY == 0:
@@ -160,7 +173,16 @@ class SearchTeamRun:
                 "area_Xbar_final": None if self.last_areas is None else self.last_areas[1],
                 "xbar_empty_step": self.xbar_empty_step, "decoy_steps": self.decoy_steps,
                 "unsafe_decisions": self.unsafe,
+                "chord_deviation_p50_m": _percentile(self.deviations, 50),
+                "chord_deviation_p95_m": _percentile(self.deviations, 95),
+                "chord_deviation_max_m": _percentile(self.deviations, 100),
                 "late_scans": int(sum(tr.late_scans for tr in self._trackers.values()))}
+
+
+def _percentile(values: list[float], q: float) -> float | None:
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return float(np.percentile(v, q)) if v.size else None
 
 
 def _wkt(geom: Any) -> str:

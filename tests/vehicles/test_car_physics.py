@@ -163,8 +163,13 @@ def test_fleet_state_and_validation(client, dynamics):
     fleet = CarFleet(client, [SEDAN, VAN], [cfg, cfg],
                      [Route(roads=("curvy.f",)), Route(random_walk=True, start_road="tail.r", start_s=3.0)],
                      net, 240, np.random.default_rng(0), dynamics=dynamics)
+    assert np.array_equal(fleet.state.a_W, np.zeros((2, 3))) and np.array_equal(fleet.state.v_W, np.zeros((2, 3)))
     run_fleet(fleet, client, 3.0)
     st = fleet.state
+    fleet.apply_actuation()  # one more tick: a_W is the finite difference of v_W over it
+    p.stepSimulation(physicsClientId=client)
+    fleet.after_step(3 * 240 + 1)
+    assert np.array_equal(fleet.state.a_W, (fleet.state.v_W - st.v_W) * 240) and fleet.state.tick == 3 * 240 + 1
     assert st.p_W.shape == (2, 3) and st.q_WB.shape == (2, 4) and st.v_W.shape == (2, 3) and st.a_W.shape == (2, 3)
     assert np.allclose(np.linalg.norm(st.q_WB, axis=1), 1.0)
     assert st.road_id == ["curvy.f", "tail.r"]

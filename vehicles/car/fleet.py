@@ -69,6 +69,19 @@ class CarState:
     stopped: np.ndarray
 
 
+@dataclass(frozen=True)
+class _Arrays:
+    """One reading of all cars as arrays (rows per car; see :class:`CarState`)."""
+
+    p_W: np.ndarray
+    q_WB: np.ndarray
+    v_W: np.ndarray
+    omega_z: np.ndarray
+    a_W: np.ndarray
+    yaw: np.ndarray
+    speed: np.ndarray
+
+
 class CarFleet:
     """Cars, their drivers and their actuation.
 
@@ -111,8 +124,11 @@ class CarFleet:
         self._events: list[dict] = []
         self._off_road = np.zeros(n, dtype=bool)
         self._tick = 0
+        self._rows: list[tuple[float, ...]] = []
+        self._prev_rows: list[tuple[float, ...]] | None = None  # None: no step yet (a_W = 0)
         self._read()
-        self._a_W = np.zeros((n, 3))
+        self._prev_rows = None
+        self._every_gcd = math.gcd(*self._every)
         self._cache: CarState | None = None
 
     def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
@@ -125,13 +141,25 @@ class CarFleet:
                                      f"lengths {need:.2f} m; separate their Route.start_s")
 
     def _read(self) -> None:
-        rows = [d.state_row() for d in self.dynamics]  # per car: p_W, q_WB, v_W, omega_W
-        x = np.array(rows)
-        self._p_W, self._q_WB, self._v_W, self._omega_z = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12]
-        # heading and forward speed per car in scalar math: a handful of cars, read every physics tick
-        yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
-        self._yaw_arr = np.array(yaw)
-        self._speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
+        """Read every car's state row; the arrays are made from the rows when first needed (:meth:`_arrays`)."""
+        self._prev_rows, self._rows = self._rows, [d.state_row() for d in self.dynamics]
+        self._arr: _Arrays | None = None
+
+    def _arrays(self) -> _Arrays:
+        """The last rows as arrays, with the heading and forward speed of each car and its acceleration, the finite
+        difference of v_W over the last physics step."""
+        if self._arr is None:
+            rows = self._rows
+            x = np.array(rows)
+            # heading and forward speed per car in scalar math: a handful of cars
+            yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
+            speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
+            v_W = x[:, 7:10]
+            a_W = (np.zeros_like(v_W) if self._prev_rows is None
+                   else (v_W - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz)
+            self._arr = _Arrays(p_W=x[:, 0:3], q_WB=x[:, 3:7], v_W=v_W, omega_z=x[:, 12], a_W=a_W,
+                                yaw=np.array(yaw), speed=speed)
+        return self._arr
 
     def apply_actuation(self) -> None:
         """Run-loop phase 1: each car's dynamics acts on its driver's last command."""
@@ -140,20 +168,20 @@ class CarFleet:
 
     def after_step(self, tick: int) -> None:
         """After ``p.stepSimulation()``: read the cars' state and run the drivers due at ``tick``."""
-        v_prev = self._v_W
         self._read()
-        self._a_W = (self._v_W - v_prev) * self.physics_hz
         self._tick = tick
         self._cache = None
+        if tick % self._every_gcd:
+            return
         due = [i for i, e in enumerate(self._every) if tick % e == 0]
         if not due:
             return
-        leaders = find_leaders(self.drivers, self._p_W[:, :2], self._yaw_arr, self._speed, self._lengths)
+        x = self._arrays()
+        leaders = find_leaders(self.drivers, x.p_W[:, :2], x.yaw, x.speed, self._lengths)
         for i in due:
             drv = self.drivers[i]
-            drv.update(self._p_W[i, :2], float(self._yaw_arr[i]), float(self._speed[i]), tick, leaders[i],
-                       float(self._omega_z[i]))
-            self.dynamics[i].on_driver_update(float(self._speed[i]))
+            drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i], float(x.omega_z[i]))
+            self.dynamics[i].on_driver_update(float(x.speed[i]))
             self._events += [dict(e, car=i) for e in drv.pop_events()]
             self._check_road(i, tick)
 
@@ -172,10 +200,11 @@ class CarFleet:
     def state(self) -> CarState:
         """Ground truth after the last ``after_step``."""
         if self._cache is None:
-            located = [d.locate(self._p_W[i, :2]) for i, d in enumerate(self.drivers)]
+            x = self._arrays()
+            located = [d.locate(x.p_W[i, :2]) for i, d in enumerate(self.drivers)]
             self._cache = CarState(
-                tick=self._tick, p_W=self._p_W.copy(), q_WB=self._q_WB.copy(), v_W=self._v_W.copy(),
-                a_W=self._a_W.copy(), yaw=self._yaw_arr.copy(), speed=self._speed.copy(),
+                tick=self._tick, p_W=x.p_W.copy(), q_WB=x.q_WB.copy(), v_W=x.v_W.copy(), a_W=x.a_W.copy(),
+                yaw=x.yaw.copy(), speed=x.speed.copy(),
                 road_id=[r[0] for r in located], s=np.array([r[1] for r in located]),
                 lateral=np.array([r[2] for r in located]), stopped=np.array([d.stopped for d in self.drivers]))
         return self._cache

@@ -31,21 +31,8 @@ def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
 
 
 class CarBoxBody:
-    """One car's box in a PyBullet world.
-
-    Parameters
-    ----------
-    client_id : int
-        PyBullet physics client.
-    params : CarParams
-        The car type (body dimensions, ``cog_height``).
-    p_xy : np.ndarray
-        Initial position of the centre of mass in the ground plane (2,) (m).
-    yaw : float
-        Initial heading (rad).
-    ground_z : float
-        Height of the ground under the car (m).
-    """
+    """One car's box in a PyBullet world; parameters as those of :class:`~vehicles.car.body.CarBody` (client, car
+    type, initial centre-of-mass position (2,) m and heading rad, ground height m)."""
 
     def __init__(self, client_id: int, params: CarParams, p_xy: np.ndarray, yaw: float, ground_z: float = 0.0) -> None:
         self.client_id, self.params = client_id, params

@@ -56,16 +56,7 @@ class CarDynamics(Protocol):
 class PhysicsDynamics:
     """A physics car: speed and steering references at the physics rate become :class:`CarBody` motor targets.
 
-    Parameters
-    ----------
-    client_id : int
-        PyBullet physics client.
-    params : CarParams
-        The car type.
-    p_xy, yaw : np.ndarray, float
-        Spawn position (2,) (m) and heading (rad).
-    physics_hz : int
-        Physics rate (Hz).
+    Parameters: those of :func:`make_dynamics` after ``kind``.
     """
 
     def __init__(self, client_id: int, params: CarParams, p_xy: np.ndarray, yaw: float, physics_hz: int) -> None:
@@ -94,18 +85,10 @@ class PhysicsDynamics:
 
 
 class KinematicDynamics:
-    """A kinematic car: a :class:`KinematicBicycle` moving a :class:`CarBoxBody`.
+    """A kinematic car: a :class:`KinematicBicycle` moving a :class:`CarBoxBody`, integrated in steps of
+    1 / physics_hz from rest.
 
-    Parameters
-    ----------
-    client_id : int
-        PyBullet physics client.
-    params : CarParams
-        The car type.
-    p_xy, yaw : np.ndarray, float
-        Spawn position (2,) (m) and heading (rad); the car starts at rest.
-    physics_hz : int
-        Physics rate (Hz): the integration step is 1 / physics_hz.
+    Parameters: those of :func:`make_dynamics` after ``kind``.
     """
 
     def __init__(self, client_id: int, params: CarParams, p_xy: np.ndarray, yaw: float, physics_hz: int) -> None:
@@ -136,7 +119,21 @@ CAR_DYNAMICS: dict[str, Callable[..., CarDynamics]] = {"physics": PhysicsDynamic
 
 def make_dynamics(kind: str, client_id: int, params: CarParams, p_xy: np.ndarray, yaw: float,
                   physics_hz: int) -> CarDynamics:
-    """The dynamics named ``kind`` (a key of :data:`CAR_DYNAMICS`) for one car spawned at ``p_xy``, ``yaw``."""
+    """The dynamics named ``kind`` of one car.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`CAR_DYNAMICS`.
+    client_id : int
+        PyBullet physics client.
+    params : CarParams
+        The car type.
+    p_xy, yaw : np.ndarray, float
+        Spawn position of the centre of mass (2,) (m) and heading (rad); the car starts at rest.
+    physics_hz : int
+        Physics rate (Hz).
+    """
     try:
         cls = CAR_DYNAMICS[kind]
     except KeyError:

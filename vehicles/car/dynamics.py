@@ -15,9 +15,9 @@ step per tick, then its :class:`~vehicles.car.box_body.CarBoxBody` placed at the
 the step's contacts and every raycast after it see the box where the state says the car is. The model is integrated
 at the physics rate, not in closed form between driver updates: the steering angle ramps at ``max_steer_rate`` within
 a driver period (no closed form for the heading), the box must be placed every tick anyway, and explicit Euler at
-1/240 s is exact in the speed (constant acceleration between updates) and in the heading for a constant steering angle,
-while the position runs on the polygon inscribed in a circle larger than the true one by (omega dt)^2 / 24 (< 1e-6
-relative in town driving). It costs a few microseconds per car and tick.
+1/240 s is exact in the speed (constant acceleration between updates) and, at constant speed and steering angle, in
+the heading, while the position then runs on the polygon inscribed in a circle larger than the true one by
+(omega dt)^2 / 24 (< 1e-6 relative in town driving). It costs a few microseconds per car and tick.
 """
 
 from __future__ import annotations

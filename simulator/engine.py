@@ -149,8 +149,9 @@ def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
         for tick in range(1, n_ticks + 1):
             assembly.step(tick)
             tracker.observe(tick, assembly)
-            if tick % flush_every == 0:
-                recorder.flush(tracker.metrics(clock.time(tick), time.perf_counter() - wall0, complete=False))
+            if tick % flush_every == 0:  # partial metrics unsynced: an fsync takes milliseconds (~4 % of a run here)
+                recorder.flush(tracker.metrics(clock.time(tick), time.perf_counter() - wall0, complete=False),
+                               sync=False)
             if bar is not None and tick % 240 == 0:
                 bar.update(240)
             if options.on_tick is not None:

@@ -237,7 +237,7 @@ def fleet_options(world: World) -> Any:
 
 
 def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
-    """The ground vehicles, their drivers and routes."""
+    """The ground vehicles, their drivers, routes and dynamics (physics multibody or kinematic box)."""
     from vehicles.car.driver_config import DriverConfig
     from vehicles.car.fleet import CarFleet
     from vehicles.car.params import load_car
@@ -255,4 +255,5 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
             routes.append(Route(roads=tuple(g.route.roads), **where))
         else:
             routes.append(Route(random_walk=True, start_road=g.route.random_walk_from, **where))
-    return CarFleet(client, params, drivers, routes, network, physics_hz, rng)
+    return CarFleet(client, params, drivers, routes, network, physics_hz, rng,
+                    dynamics=[g.dynamics for g in world.ground_vehicles])

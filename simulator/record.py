@@ -39,13 +39,19 @@ def json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and rename, so readers never see half a file."""
+def atomic_write_text(path: Path, text: str, sync: bool = True) -> None:
+    """Write ``text`` to ``path`` via a temporary file and rename, so readers never see half a file.
+
+    ``sync``: force the text to the disk before the rename (``os.fsync``), so that even a crash of the machine leaves
+    the old or the new file. Without it a killed process still leaves one of them whole (the written text is in the
+    operating system's cache); only a crash of the machine itself can lose it.
+    """
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "w", encoding="utf-8") as f:
         f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
+        if sync:
+            f.flush()
+            os.fsync(f.fileno())
     os.replace(tmp, path)
 
 
@@ -106,14 +112,14 @@ class RunRecorder:
         self.closed = False
 
     # -- static files ----------------------------------------------------------------------------------------------
-    def write_text(self, name: str, text: str) -> Path:
+    def write_text(self, name: str, text: str, sync: bool = True) -> Path:
         path = self.out_dir / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(path, text)
+        atomic_write_text(path, text, sync)
         return path
 
-    def write_json(self, name: str, data: Any) -> Path:
-        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+    def write_json(self, name: str, data: Any, sync: bool = True) -> Path:
+        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n", sync)
 
     def append_line(self, name: str, data: Any) -> None:
         """Append ``data`` as one JSON line to the file ``name`` (written at once; replaced with a new record)."""
@@ -150,12 +156,13 @@ class RunRecorder:
             self._streams[name] = _Stream(self.out_dir / "timeseries" / name)
         return self._streams[name]
 
-    def flush(self, metrics: dict[str, Any] | None = None) -> None:
-        """Write buffered rows as new chunks; rewrite ``metrics.json`` when given."""
+    def flush(self, metrics: dict[str, Any] | None = None, sync: bool = True) -> None:
+        """Write buffered rows as new chunks; rewrite ``metrics.json`` when given (``sync``: see
+        :func:`atomic_write_text`; the chunks are never synced)."""
         for s in self._streams.values():
             s.flush()
         if metrics is not None:
-            self.write_json("metrics.json", metrics)
+            self.write_json("metrics.json", metrics, sync)
         self._events.flush()
 
     def close(self) -> None:

@@ -20,6 +20,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from typing import Any
 
@@ -56,9 +57,11 @@ class MetricsTracker:
         self.standoff_err: dict[int, list[float]] = defaultdict(list)
         self.phase_err: list[float] = []
         self.standoffs: dict[int, float] = {}
+        self._every = 1  # ticks between observations that can have something to do: gcd of the agent and record rates
 
     def attach(self, asm: Any) -> None:
         self.asm = asm
+        self._every = math.gcd(asm.record_div, *(a.divisor for a in asm.agents))
         n = len(asm.uav_ids)
         self.min_sep = np.full(n, np.inf)
         world = asm.world_spec
@@ -68,6 +71,8 @@ class MetricsTracker:
                 self.standoffs[i] = g.standoff_m
 
     def observe(self, tick: int, asm: Any) -> None:
+        if tick % self._every:  # no agent due and no record tick (most ticks)
+            return
         due = [a.uav for a in asm.agents if tick % a.divisor == 0]
         if due and asm.target_index is not None and asm.cars is not None:
             st = asm.cars.state

@@ -168,6 +168,12 @@ class GroundVehicleSpec(Strict):
     role: Literal["target", "decoy", "traffic"] = "target"
     route: RouteSpec
     driver: dict[str, Any] = Field(default_factory=dict, description="overrides of the driver configuration")
+    dynamics: Literal["physics", "kinematic"] = Field(
+        "physics", description="how the car moves under its driver: 'physics' = a PyBullet multibody (chassis, four "
+        "wheel joints with motors, Ackermann steering, tyre contacts); 'kinematic' = a kinematic bicycle model "
+        "integrated at the physics rate, carrying one rigid box of the car's body size in the scene (sensors, "
+        "cameras and contact checks see it; no wheels, tyre slip or contact forces act on it; much cheaper to step). "
+        "Same driver, route, lane following, car following and stops either way")
 
 
 class InitialPose(Strict):

@@ -81,6 +81,21 @@ def _median_rtf(name: str, repeats: int = 3, **kw) -> tuple[float, float]:
     return statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
 
 
+def _paired_rtf(name: str, overrides: tuple[str, ...], variant: tuple[str, ...],
+                repeats: int = 3) -> tuple[tuple[float, float], tuple[float, float], float]:
+    """Runs of the shipped world ``name`` with ``overrides`` alternating with runs that add the ``variant``
+    overrides (``repeats`` of each, so both see the same load of a shared machine): the medians (real-time factor,
+    loop real-time factor) of each, and the median over the pairs of the variant's real-time factor over the
+    reference's."""
+    ref, var = [], []
+    for _ in range(repeats):
+        ref.append(_world_rtf(name, overrides=overrides))
+        var.append(_world_rtf(name, overrides=overrides + variant))
+    med = statistics.median
+    return ((med(r[0] for r in ref), med(r[1] for r in ref)), (med(r[0] for r in var), med(r[1] for r in var)),
+            med(v[0] / r[0] for r, v in zip(ref, var, strict=True)))
+
+
 def _radar_only(world: str) -> tuple[str, ...]:
     """Overrides that keep only each UAV's first sensor (its radar) in the shipped world ``world``."""
     from worlds.loader import load_world
@@ -93,8 +108,27 @@ def _radar_only(world: str) -> tuple[str, ...]:
     return tuple(out)
 
 
-@benchmark("world_rtf", produces=("demo_rtf", "road_standoff_rtf", "road_standoff_loop_rtf", "helsinki_chase_rtf",
-                                   "helsinki_chase_loop_rtf"))
+def _kinematic_cars(world: str) -> tuple[str, ...]:
+    """Overrides that make every ground vehicle of the shipped world ``world`` kinematic."""
+    from worlds.loader import load_world
+
+    n = len(load_world(world).world.ground_vehicles)
+    return tuple(f"ground_vehicles[{i}].dynamics=kinematic" for i in range(n))
+
+
+def _world_records(prefix: str, target: float, physics: tuple[float, float], kinematic: tuple[float, float],
+                   speedup: float) -> list[BenchRecord]:
+    """The records of one world run with its physics cars and with kinematic cars (see :func:`bench_world_rtf`)."""
+    return [BenchRecord(name=f"{prefix}_rtf", value=physics[0], unit="x", target=target, better="higher"),
+            BenchRecord(name=f"{prefix}_loop_rtf", value=physics[1], unit="x", better="higher"),
+            BenchRecord(name=f"{prefix}_kinematic_rtf", value=kinematic[0], unit="x", target=target, better="higher"),
+            BenchRecord(name=f"{prefix}_kinematic_loop_rtf", value=kinematic[1], unit="x", better="higher"),
+            BenchRecord(name=f"{prefix}_kinematic_speedup", value=speedup, unit="x", better="higher")]
+
+
+@benchmark("world_rtf", produces=tuple(f"{w}_{k}" for w in ("road_standoff", "helsinki_chase")
+                                       for k in ("rtf", "loop_rtf", "kinematic_rtf", "kinematic_loop_rtf",
+                                                 "kinematic_speedup")) + ("demo_rtf",))
 def bench_world_rtf() -> list[BenchRecord]:
     """Closed-loop real-time factors of shipped worlds run for their own duration (median of 3 runs each): the demo
     world (2 quadrotors, 1 car, radars, EKF, vector-field guidance; 60 s), paper 002's ``road_standoff`` (2
@@ -102,15 +136,18 @@ def bench_world_rtf() -> list[BenchRecord]:
     without its cameras (3 quadrotors, radars, ECUKF on the city's roads, covariance intersection, NMPC among the
     buildings, a building-blocked radio; 120 s; target >= 10x). ``*_loop_rtf``: the same runs without their setup
     (world, solvers and scene: ≈ 1-1.5 s per run with warm caches; ``wall_time_breakdown_s`` of the metrics says
-    where the rest goes)."""
+    where the rest goes).
+
+    ``*_kinematic_*``: the same two worlds with every ground vehicle kinematic (``ground_vehicles[i].dynamics:
+    kinematic``: a kinematic bicycle carrying a box instead of the multibody car), each run alternating with a run
+    of the shipped world so both see the same load; ``*_kinematic_speedup`` is the median over those pairs of the
+    kinematic run's real-time factor over the physics run's."""
     demo, _ = _median_rtf("demo")
-    road, road_loop = _median_rtf("road_standoff")
-    city, city_loop = _median_rtf("helsinki_chase", overrides=_radar_only("helsinki_chase"))
-    return [BenchRecord(name="demo_rtf", value=demo, unit="x", better="higher"),
-            BenchRecord(name="road_standoff_rtf", value=road, unit="x", target=30.0, better="higher"),
-            BenchRecord(name="road_standoff_loop_rtf", value=road_loop, unit="x", better="higher"),
-            BenchRecord(name="helsinki_chase_rtf", value=city, unit="x", target=10.0, better="higher"),
-            BenchRecord(name="helsinki_chase_loop_rtf", value=city_loop, unit="x", better="higher")]
+    out = [BenchRecord(name="demo_rtf", value=demo, unit="x", better="higher")]
+    for world, target, overrides in (("road_standoff", 30.0, ()),
+                                     ("helsinki_chase", 10.0, _radar_only("helsinki_chase"))):
+        out += _world_records(world, target, *_paired_rtf(world, overrides, _kinematic_cars(world)))
+    return out
 
 
 _CAMPAIGN_RUNS = 4

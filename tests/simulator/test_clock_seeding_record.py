@@ -70,3 +70,16 @@ def test_metrics_file_is_always_complete_json(tmp_path):
         rec.flush({"k": k})
         assert json.loads((tmp_path / "metrics.json").read_text()) == {"k": k}
     assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp")]
+
+
+def test_partial_metrics_are_written_whole_without_a_sync_and_final_ones_synced(tmp_path, monkeypatch):
+    import simulator.record as record
+
+    synced = []
+    monkeypatch.setattr(record.os, "fsync", lambda fd: synced.append(fd))
+    rec = RunRecorder(tmp_path)
+    rec.flush({"k": 0}, sync=False)
+    assert json.loads((tmp_path / "metrics.json").read_text()) == {"k": 0} and synced == []
+    rec.flush({"k": 1})
+    assert json.loads((tmp_path / "metrics.json").read_text()) == {"k": 1} and len(synced) == 1
+    assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp")]

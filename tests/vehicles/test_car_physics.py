@@ -1,4 +1,6 @@
-"""The PyBullet car body and the fleet: stability, actuation, road following, stops and car following."""
+"""The PyBullet car body and the fleet: stability, actuation, road following, stops and car following.
+
+The fleet tests run every car as a physics multibody and as a kinematic box (``dynamics``), and mixed fleets."""
 
 import math
 
@@ -15,6 +17,7 @@ from vehicles.car.params import load_car
 from vehicles.car.route import Route
 
 SEDAN, VAN = load_car("sedan"), load_car("van")
+DYNAMICS = ("physics", "kinematic")
 
 
 @pytest.fixture
@@ -69,12 +72,14 @@ def test_steady_turn_matches_the_bicycle_yaw_rate_and_ackermann_knuckles(client)
     assert abs(p.getEulerFromQuaternion(q)[0]) < 0.02  # little roll (rigid body, no suspension)
 
 
+@pytest.mark.parametrize("dynamics", DYNAMICS)
 @pytest.mark.parametrize("params", [SEDAN, VAN], ids=["sedan", "van"])
-def test_physics_car_on_a_curvy_spline_road_keeps_its_lane_and_speed_profile(client, params):
+def test_car_on_a_curvy_spline_road_keeps_its_lane_and_speed_profile(client, params, dynamics):
     net = curvy_network()
     a_lat = 3.5
     cfg = DriverConfig(cruise_fraction_range=(1.0, 1.0), stop_probability=0.0, lateral_accel_max=a_lat)
-    fleet = CarFleet(client, [params], [cfg], [Route(roads=("curvy.f", "tail.f"))], net, 240, np.random.default_rng(1))
+    fleet = CarFleet(client, [params], [cfg], [Route(roads=("curvy.f", "tail.f"))], net, 240, np.random.default_rng(1),
+                     dynamics=[dynamics])
     run = run_fleet(fleet, client, 60.0)
     road = net.roads["curvy.f"]
     on = np.array([r[0] == "curvy.f" for r in run.road])
@@ -96,13 +101,14 @@ def test_physics_car_on_a_curvy_spline_road_keeps_its_lane_and_speed_profile(cli
     assert not any(e["type"] == "car_left_road" for e in run.events)
 
 
-def test_physics_car_stops_at_listed_junction_and_drives_on_after_dwell(client):
+@pytest.mark.parametrize("dynamics", DYNAMICS)
+def test_car_stops_at_listed_junction_and_drives_on_after_dwell(client, dynamics):
     net = SimpleNetwork()
     net.add(StraightRoad(id="a", a=(0.0, 0.0), b=(80.0, 0.0), start_node="n0", end_node="n1", speed_limit=12.0))
     net.add(StraightRoad(id="b", a=(80.0, 0.0), b=(80.0, 80.0), start_node="n1", end_node="n2", speed_limit=12.0))
     cfg = DriverConfig(cruise_fraction_range=(1.0, 1.0), dwell_range=(2.0, 4.0), cruise_change_period=0.0)
     fleet = CarFleet(client, [SEDAN], [cfg], [Route(roads=("a", "b"), stops=("n1",))], net, 240,
-                     np.random.default_rng(5))
+                     np.random.default_rng(5), dynamics=[dynamics])
     run = run_fleet(fleet, client, 40.0, stride=1)  # row k holds tick k + 1
     ev = run.events
     stop = next(e for e in ev if e["type"] == "car_stop")
@@ -117,14 +123,16 @@ def test_physics_car_stops_at_listed_junction_and_drives_on_after_dwell(client):
     assert run.stopped[-1, 0]
 
 
-def test_two_physics_cars_keep_the_idm_gap(client):
+@pytest.mark.parametrize("dynamics", [(a, b) for a in DYNAMICS for b in DYNAMICS], ids="-".join)
+def test_two_cars_keep_the_idm_gap(client, dynamics):
+    """Leader and follower each physics or kinematic: mixed fleets follow one another like uniform ones."""
     net = SimpleNetwork()
     net.add(StraightRoad(id="long", a=(0.0, 0.0), b=(1200.0, 0.0), start_node="s", end_node="t", speed_limit=18.0))
     lead = DriverConfig(cruise_fraction_range=(0.5, 0.5), cruise_change_period=0.0)
     follow = DriverConfig(cruise_fraction_range=(1.0, 1.0), cruise_change_period=0.0)
     fleet = CarFleet(client, [VAN, SEDAN], [lead, follow], [Route(roads=("long",), start_s=40.0),
                                                             Route(roads=("long",), start_s=5.0)],
-                     net, 240, np.random.default_rng(2))
+                     net, 240, np.random.default_rng(2), dynamics=dynamics)
     run = run_fleet(fleet, client, 60.0)
     gap = run.p_W[:, 0, 0] - run.p_W[:, 1, 0] - 0.5 * (VAN.length + SEDAN.length)
     assert gap.min() > 0.75 * follow.idm_s0
@@ -135,20 +143,33 @@ def test_two_physics_cars_keep_the_idm_gap(client):
     assert np.max(np.abs(gap[late] - want)) < 0.05 * want.mean()
 
 
-def test_fleet_state_and_validation(client):
+@pytest.mark.parametrize("dynamics", [("physics", "physics"), ("kinematic", "kinematic"), ("kinematic", "physics")],
+                         ids="-".join)
+def test_fleet_state_and_validation(client, dynamics):
     net = curvy_network()
     cfg = DriverConfig()
     with pytest.raises(ValueError, match="spawn"):
         CarFleet(client, [SEDAN, SEDAN], [cfg, cfg], [Route(roads=("curvy.f",)), Route(roads=("curvy.f",))], net,
-                 240, np.random.default_rng(0))
+                 240, np.random.default_rng(0), dynamics=dynamics)
     with pytest.raises(ValueError, match="rate_hz 50 Hz does not divide"):
         CarFleet(client, [SEDAN], [DriverConfig(rate_hz=50)], [Route(roads=("curvy.f",))], net, 240,
-                 np.random.default_rng(0))
+                 np.random.default_rng(0), dynamics=dynamics[:1])
+    with pytest.raises(ValueError, match="one params, driver config, route and dynamics per car"):
+        CarFleet(client, [SEDAN], [cfg], [Route(roads=("curvy.f",))], net, 240, np.random.default_rng(0),
+                 dynamics=dynamics)
+    with pytest.raises(ValueError, match=r"car dynamics must be one of \['kinematic', 'physics'\], got 'hover'"):
+        CarFleet(client, [SEDAN], [cfg], [Route(roads=("curvy.f",))], net, 240, np.random.default_rng(0),
+                 dynamics=["hover"])
     fleet = CarFleet(client, [SEDAN, VAN], [cfg, cfg],
                      [Route(roads=("curvy.f",)), Route(random_walk=True, start_road="tail.r", start_s=3.0)],
-                     net, 240, np.random.default_rng(0))
+                     net, 240, np.random.default_rng(0), dynamics=dynamics)
+    assert np.array_equal(fleet.state.a_W, np.zeros((2, 3))) and np.array_equal(fleet.state.v_W, np.zeros((2, 3)))
     run_fleet(fleet, client, 3.0)
     st = fleet.state
+    fleet.apply_actuation()  # one more tick: a_W is the finite difference of v_W over it
+    p.stepSimulation(physicsClientId=client)
+    fleet.after_step(3 * 240 + 1)
+    assert np.array_equal(fleet.state.a_W, (fleet.state.v_W - st.v_W) * 240) and fleet.state.tick == 3 * 240 + 1
     assert st.p_W.shape == (2, 3) and st.q_WB.shape == (2, 4) and st.v_W.shape == (2, 3) and st.a_W.shape == (2, 3)
     assert np.allclose(np.linalg.norm(st.q_WB, axis=1), 1.0)
     assert st.road_id == ["curvy.f", "tail.r"]
@@ -158,7 +179,8 @@ def test_fleet_state_and_validation(client):
     assert len(fleet.body_ids) == 2
 
 
-def test_fleet_is_deterministic_for_a_seed():
+@pytest.mark.parametrize("dynamics", DYNAMICS)
+def test_fleet_is_deterministic_for_a_seed(dynamics):
     net = curvy_network()
     cfg = DriverConfig(stop_probability=0.5)
     routes = [Route(random_walk=True, start_road="curvy.f", start_s=5.0),
@@ -166,7 +188,8 @@ def test_fleet_is_deterministic_for_a_seed():
     runs = []
     for _ in range(2):
         c = bullet_client(240)
-        fleet = CarFleet(c, [SEDAN, VAN], [cfg, cfg], routes, net, 240, np.random.default_rng(123))
+        fleet = CarFleet(c, [SEDAN, VAN], [cfg, cfg], routes, net, 240, np.random.default_rng(123),
+                         dynamics=[dynamics, "physics"])
         runs.append(run_fleet(fleet, c, 2.0))
         p.disconnect(c)
     assert np.array_equal(runs[0].p_W, runs[1].p_W)

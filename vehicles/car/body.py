@@ -24,7 +24,7 @@ import pybullet as p
 
 from vehicles.car.params import CarParams
 
-__all__ = ["CarBody", "ackermann_angles", "wheel_speeds"]
+__all__ = ["CarBody", "ackermann_angles", "chassis_box", "wheel_speeds"]
 
 STEER_JOINTS = (0, 2)
 WHEEL_JOINTS = (1, 3, 4, 5)  # FL, FR, RL, RR
@@ -34,6 +34,16 @@ _STEER_TOL = 1e-4  # rad; steering target changes below this are not re-sent
 _SPEED_TOL = 1e-3  # m/s; speed target changes below this are not re-sent
 _BODY_RGBA = (0.75, 0.1, 0.1, 1.0)
 _WHEEL_RGBA = (0.1, 0.1, 0.1, 1.0)
+
+
+def chassis_box(params: CarParams) -> tuple[list[float], float]:
+    """The chassis box in the body frame: (half extents (3,) m, height of its centre above the centre of mass (m)).
+
+    Length x width x (height - ground_clearance), its floor at ``ground_clearance`` above the ground.
+    """
+    box_h = params.height - params.ground_clearance
+    half = [0.5 * params.length, 0.5 * params.width, 0.5 * box_h]
+    return half, params.ground_clearance + 0.5 * box_h - params.cog_height
 
 
 def ackermann_angles(delta: float, wheelbase: float, track: float) -> tuple[float, float]:
@@ -73,9 +83,7 @@ class CarBody:
         self.client_id, self.params = client_id, params
         c, par = client_id, params
         L, t, r, h = par.wheelbase, par.track, par.wheel_radius, par.cog_height
-        box_h = par.height - par.ground_clearance
-        box_z = par.ground_clearance + 0.5 * box_h - h
-        half = [0.5 * par.length, 0.5 * par.width, 0.5 * box_h]
+        half, box_z = chassis_box(par)
         chassis = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, collisionFramePosition=[0, 0, box_z],
                                          physicsClientId=c)
         chassis_vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, visualFramePosition=[0, 0, box_z],

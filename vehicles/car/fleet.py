@@ -1,10 +1,10 @@
-"""A fleet of physics cars driven along roads: the run loop's view of all ground vehicles.
+"""A fleet of cars driven along roads: the run loop's view of all ground vehicles.
 
-Per tick the run loop calls ``apply_actuation()``, ``p.stepSimulation()``, ``after_step(tick)``. Actuation turns each
-driver's last :class:`~vehicles.car.driver_config.DriveCommand` into motor targets at the physics rate: the speed
-reference integrates the commanded acceleration, v_ref <- clip(v_ref + a / f_phys, 0, v_max), re-anchored to within
-``_REF_BAND`` of the measured speed at each driver update (so wheel slip or a blocked car cannot wind it up), and the
-steering reference follows the command at most ``max_steer_rate``.
+Per tick the run loop calls ``apply_actuation()``, ``p.stepSimulation()``, ``after_step(tick)``. Actuation hands each
+driver's last :class:`~vehicles.car.driver_config.DriveCommand` to the car's dynamics (:mod:`vehicles.car.dynamics`):
+motor targets of a physics car's multibody, or one step of a kinematic car's bicycle model and the placing of its box.
+After the step the fleet reads every car's state and runs the drivers due at that tick, with the leaders found among
+all cars, so physics and kinematic cars drive in one traffic.
 """
 
 from __future__ import annotations
@@ -15,17 +15,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vehicles.car.body import CarBody
 from vehicles.car.driver import Driver
 from vehicles.car.driver_config import DriverConfig
+from vehicles.car.dynamics import make_dynamics
 from vehicles.car.params import CarParams
 from vehicles.car.road_protocol import NetworkLike
 from vehicles.car.route import Route
 from vehicles.car.traffic import find_leaders
 
 __all__ = ["CarFleet", "CarState"]
-
-_REF_BAND = 1.0  # m/s; largest lead of the speed reference over the measured speed
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -71,6 +69,19 @@ class CarState:
     stopped: np.ndarray
 
 
+@dataclass(frozen=True)
+class _Arrays:
+    """One reading of all cars as arrays (rows per car; see :class:`CarState`)."""
+
+    p_W: np.ndarray
+    q_WB: np.ndarray
+    v_W: np.ndarray
+    omega_z: np.ndarray
+    a_W: np.ndarray
+    yaw: np.ndarray
+    speed: np.ndarray
+
+
 class CarFleet:
     """Cars, their drivers and their actuation.
 
@@ -87,30 +98,37 @@ class CarFleet:
         Physics rate (Hz); every driver's ``rate_hz`` must divide it.
     rng : np.random.Generator
         Spawned into one child generator per car.
+    dynamics : Sequence[str] | None
+        How each car moves, a key of :data:`vehicles.car.dynamics.CAR_DYNAMICS` (``"physics"``: PyBullet multibody;
+        ``"kinematic"``: kinematic bicycle carrying a box); None = all ``"physics"``.
     """
 
     def __init__(self, client_id: int, params: Sequence[CarParams], drivers: Sequence[DriverConfig],
-                 routes: Sequence[Route], network: NetworkLike, physics_hz: int, rng: np.random.Generator) -> None:
+                 routes: Sequence[Route], network: NetworkLike, physics_hz: int, rng: np.random.Generator,
+                 dynamics: Sequence[str] | None = None) -> None:
         n = len(params)
-        if not (len(drivers) == n == len(routes)) or n == 0:
-            raise ValueError(f"CarFleet needs one params, driver config and route per car, got "
-                             f"{len(params)}/{len(drivers)}/{len(routes)}")
+        dynamics = ["physics"] * n if dynamics is None else list(dynamics)
+        if not (len(drivers) == n == len(routes) == len(dynamics)) or n == 0:
+            raise ValueError(f"CarFleet needs one params, driver config, route and dynamics per car, got "
+                             f"{len(params)}/{len(drivers)}/{len(routes)}/{len(dynamics)}")
         self.client_id, self.physics_hz, self.params = client_id, int(physics_hz), list(params)
         self._every = [cfg.ticks_per_update(physics_hz) for cfg in drivers]
         self.drivers = [Driver(config=cfg, params=par, route=rt, network=network, rng=g, physics_hz=physics_hz)
                         for cfg, par, rt, g in zip(drivers, params, routes, rng.spawn(n), strict=True)]
         spawns = [d.spawn_pose() for d in self.drivers]
         self._check_spawns(spawns)
-        self.bodies = [CarBody(client_id, par, xy, yaw) for par, (xy, yaw) in zip(params, spawns, strict=True)]
-        self.body_ids = np.array([b.body_id for b in self.bodies], dtype=int)
+        self.dynamics = [make_dynamics(kind, client_id, par, xy, yaw, self.physics_hz)
+                         for kind, par, (xy, yaw) in zip(dynamics, params, spawns, strict=True)]
+        self.body_ids = np.array([d.body_id for d in self.dynamics], dtype=int)
         self._lengths = [par.length for par in params]
-        self._v_ref = np.zeros(n)
-        self._steer_ref = np.zeros(n)
         self._events: list[dict] = []
         self._off_road = np.zeros(n, dtype=bool)
         self._tick = 0
+        self._rows: list[tuple[float, ...]] = []
+        self._prev_rows: list[tuple[float, ...]] | None = None  # None: no step yet (a_W = 0)
         self._read()
-        self._a_W = np.zeros((n, 3))
+        self._prev_rows = None
+        self._every_gcd = math.gcd(*self._every)
         self._cache: CarState | None = None
 
     def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
@@ -123,44 +141,47 @@ class CarFleet:
                                      f"lengths {need:.2f} m; separate their Route.start_s")
 
     def _read(self) -> None:
-        rows = [b.state_row() for b in self.bodies]  # per car: p_W, q_WB, v_W, omega_W
-        x = np.array(rows)
-        self._p_W, self._q_WB, self._v_W, self._omega_z = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12]
-        # heading and forward speed per car in scalar math: a handful of cars, read every physics tick
-        yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
-        self._yaw_arr = np.array(yaw)
-        self._speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
+        """Read every car's state row; the arrays are made from the rows when first needed (:meth:`_arrays`)."""
+        self._prev_rows, self._rows = self._rows, [d.state_row() for d in self.dynamics]
+        self._arr: _Arrays | None = None
+
+    def _arrays(self) -> _Arrays:
+        """The last rows as arrays, with the heading and forward speed of each car and its acceleration, the finite
+        difference of v_W over the last physics step."""
+        if self._arr is None:
+            rows = self._rows
+            x = np.array(rows)
+            # heading and forward speed per car in scalar math: a handful of cars
+            yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
+            speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
+            v_W = x[:, 7:10]
+            a_W = (np.zeros_like(v_W) if self._prev_rows is None
+                   else (v_W - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz)
+            self._arr = _Arrays(p_W=x[:, 0:3], q_WB=x[:, 3:7], v_W=v_W, omega_z=x[:, 12], a_W=a_W,
+                                yaw=np.array(yaw), speed=speed)
+        return self._arr
 
     def apply_actuation(self) -> None:
-        """Run-loop phase 1: steering and wheel motor targets from the drivers' last commands."""
-        dt = 1.0 / self.physics_hz
-        for i, (drv, body, par) in enumerate(zip(self.drivers, self.bodies, self.params, strict=True)):
-            cmd = drv.command
-            if cmd.hold:
-                self._v_ref[i] = 0.0
-            else:
-                self._v_ref[i] = min(max(self._v_ref[i] + cmd.accel * dt, 0.0), par.max_speed)
-            step = par.max_steer_rate * dt
-            self._steer_ref[i] += min(max(cmd.steer - self._steer_ref[i], -step), step)
-            body.apply(self._steer_ref[i], self._v_ref[i], braking=cmd.hold or cmd.accel < 0.0)
+        """Run-loop phase 1: each car's dynamics acts on its driver's last command."""
+        for drv, dyn in zip(self.drivers, self.dynamics, strict=True):
+            dyn.actuate(drv.command)
 
     def after_step(self, tick: int) -> None:
         """After ``p.stepSimulation()``: read the cars' state and run the drivers due at ``tick``."""
-        v_prev = self._v_W
         self._read()
-        self._a_W = (self._v_W - v_prev) * self.physics_hz
         self._tick = tick
         self._cache = None
+        if tick % self._every_gcd:
+            return
         due = [i for i, e in enumerate(self._every) if tick % e == 0]
         if not due:
             return
-        leaders = find_leaders(self.drivers, self._p_W[:, :2], self._yaw_arr, self._speed, self._lengths)
+        x = self._arrays()
+        leaders = find_leaders(self.drivers, x.p_W[:, :2], x.yaw, x.speed, self._lengths)
         for i in due:
             drv = self.drivers[i]
-            drv.update(self._p_W[i, :2], float(self._yaw_arr[i]), float(self._speed[i]), tick, leaders[i],
-                       float(self._omega_z[i]))
-            v = max(float(self._speed[i]), 0.0)
-            self._v_ref[i] = min(max(self._v_ref[i], v - _REF_BAND), v + _REF_BAND)
+            drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i], float(x.omega_z[i]))
+            self.dynamics[i].on_driver_update(float(x.speed[i]))
             self._events += [dict(e, car=i) for e in drv.pop_events()]
             self._check_road(i, tick)
 
@@ -179,10 +200,11 @@ class CarFleet:
     def state(self) -> CarState:
         """Ground truth after the last ``after_step``."""
         if self._cache is None:
-            located = [d.locate(self._p_W[i, :2]) for i, d in enumerate(self.drivers)]
+            x = self._arrays()
+            located = [d.locate(x.p_W[i, :2]) for i, d in enumerate(self.drivers)]
             self._cache = CarState(
-                tick=self._tick, p_W=self._p_W.copy(), q_WB=self._q_WB.copy(), v_W=self._v_W.copy(),
-                a_W=self._a_W.copy(), yaw=self._yaw_arr.copy(), speed=self._speed.copy(),
+                tick=self._tick, p_W=x.p_W.copy(), q_WB=x.q_WB.copy(), v_W=x.v_W.copy(), a_W=x.a_W.copy(),
+                yaw=x.yaw.copy(), speed=x.speed.copy(),
                 road_id=[r[0] for r in located], s=np.array([r[1] for r in located]),
                 lateral=np.array([r[2] for r in located]), stopped=np.array([d.stopped for d in self.drivers]))
         return self._cache

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from vehicles.car.road_protocol import RoadLike, sample_road
 
@@ -48,6 +49,25 @@ class PathProjection:
 
 def _wrap(a: float | np.ndarray) -> float | np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+@njit(cache=True)
+def _closest_segment(xy: np.ndarray, t: np.ndarray, seg: np.ndarray, lo: int, hi: int, px: float,
+                     py: float) -> tuple[int, float, float]:
+    """(k, u, lateral): the segment k in [lo, hi) of the polyline (points ``xy``, unit tangents ``t``, lengths ``seg``)
+    closest to (px, py), the distance u along it of the closest point and the signed offset of the query point from
+    its line (left positive); the first of equally close segments. Per segment, in this order of operations:
+    d = p - a, u = min(max(d . t, 0), len), r = d - u t, |r|^2."""
+    best, k_best, u_best, lat_best = np.inf, lo, 0.0, 0.0
+    for k in range(lo, hi):
+        dx, dy = px - xy[k, 0], py - xy[k, 1]
+        tx, ty = t[k, 0], t[k, 1]
+        u = min(max(dx * tx + dy * ty, 0.0), seg[k])
+        rx, ry = dx - u * tx, dy - u * ty
+        r2 = rx * rx + ry * ry
+        if r2 < best:
+            best, k_best, u_best, lat_best = r2, k, u, tx * dy - ty * dx
+    return k_best, u_best, lat_best
 
 
 def _bezier(p0: np.ndarray, t0: np.ndarray, p3: np.ndarray, t3: np.ndarray,
@@ -174,17 +194,10 @@ class LanePath:
         """Closest point of the path to ``p_xy`` (m), searching segments near ``hint`` (all when None)."""
         n = len(self._seg)
         lo, hi = (0, n) if hint is None else (max(0, hint - window), min(n, hint + window))
-        a = self.xy[lo:hi]
-        t = self._t[lo:hi]
-        d = np.asarray(p_xy, dtype=float)[:2] - a
-        u = np.minimum(np.maximum(np.einsum("ij,ij->i", d, t), 0.0), self._seg[lo:hi])  # ufuncs: np.clip is slower
-        r = d - u[:, None] * t
-        i = int(np.argmin(np.einsum("ij,ij->i", r, r)))
-        k = lo + i
-        lateral = float(t[i, 0] * d[i, 1] - t[i, 1] * d[i, 0])
-        frac = u[i] / max(self._seg[k], 1e-12)
+        k, u, lateral = _closest_segment(self.xy, self._t, self._seg, lo, hi, float(p_xy[0]), float(p_xy[1]))
+        frac = u / max(self._seg[k], 1e-12)
         heading = float(self.heading[k] + frac * _wrap(self.heading[k + 1] - self.heading[k]))
-        return PathProjection(s=float(self.s[k] + u[i]), lateral=lateral, heading=heading, index=k)
+        return PathProjection(s=float(self.s[k] + u), lateral=lateral, heading=heading, index=k)
 
     def locate(self, s: float) -> tuple[int, float]:
         """(road index, arc length on that road's centre-line (m)) of path arc length ``s``."""

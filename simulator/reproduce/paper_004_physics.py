@@ -57,9 +57,17 @@ def _one(run_dir: Any, metrics: dict[str, Any]) -> dict[str, float]:
             "decoy_seen": float(decoys.max() > 0), "decoy_end": float(decoys[-1] > 0),
             "decoy_steps": float((decoys > 0).sum()), "min_obs": float(np.min(d_obs)),
             "unsafe": float(metrics["search.unsafe_decisions"]),
+            "deviation_p95": float(metrics.get("search.chord_deviation_p95_m") or np.nan),
             "collisions": float(sum(v for k, v in metrics.items() if k.startswith("uavs.")
                                     and k.endswith(".collisions"))),
             "rtf": float(metrics["real_time_factor"])}
+
+
+def _margin() -> float:
+    """The world's safe-loiter margin over d_col (m)."""
+    from worlds.loader import load_world
+
+    return float(load_world(WORLD).world.uavs[0].autonomy.guidance.search.clearance_margin)
 
 
 def physics_cross_check(ctx: ReproContext) -> tuple[Table, list[Finding], int]:
@@ -95,6 +103,8 @@ def physics_cross_check(ctx: ReproContext) -> tuple[Table, list[Finding], int]:
         ("closest approach of a UAV to an obstacle (m)", f"≥ {D_COL:g}", f"{col['min_obs'].min():.1f}"),
         ("collisions / decisions without a safe candidate", "–",
          f"{int(col['collisions'].sum())} / {int(col['unsafe'].sum())}"),
+        ("distance of a UAV from its planned chord's end after a step, 95th percentile (m)", "0 (unicycle)",
+         mean_ci(col["deviation_p95"]).text()),
         ("real-time factor of a run", "–", mean_ci(col["rtf"]).text()),
     )
     table = Table(title=f"Cross-check on PyBullet quadrotors: the physics world `{WORLD}`",
@@ -125,5 +135,6 @@ def physics_cross_check(ctx: ReproContext) -> tuple[Table, list[Finding], int]:
         verdict="reproduced" if col["min_obs"].min() >= D_COL and col["collisions"].sum() == 0 else "not reproduced",
         why=f"closest approach {col['min_obs'].min():.1f} m, {int(col['collisions'].sum())} collisions, "
             f"{int(col['unsafe'].sum())} decisions without a safe candidate (the quadrotor strays from the planned "
-            "chords; the world keeps d_col + 12 m)"))
+            f"chords: p95 {np.median(col['deviation_p95']):.1f} m in the median run; the world keeps d_col + "
+            f"{_margin():g} m)"))
     return table, findings, runs

@@ -243,8 +243,6 @@ class Assembly:
         agents = [a for a in self.agents if tick % a.divisor == 0]
         team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
         for a in agents:                                                  # then every agent fuses and plans
-            if self.channel is not None:
-                self._broadcast_state(a.uav, t, tick)
             mates, shared = self.inbox(a.uav, t, tick)
             own = self.own_state(a.uav, t)
             if a.uav in team:
@@ -252,6 +250,8 @@ class Assembly:
             else:
                 result = a.agent.step(t, own, mates, shared if a.agent.fusion is not None else ())
             self.quads.set_command(a.uav, _to_command(result.setpoint))
+            if self.channel is not None:  # after planning, so the plan sent starts from the state sent
+                self._broadcast_state(a.uav, t, tick)
             if self._sharing:
                 self._share_estimate(a.uav, result.local_estimate, t, tick)
             self.latest_estimates[a.uav] = result.estimate

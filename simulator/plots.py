@@ -5,7 +5,9 @@
 - ``plots/altitude.png``: UAV altitudes over time;
 - ``plots/standoff.png``: with standoff guidance, each UAV's standoff-distance error and the team's phase-keeping error
   over time (paper 002's Table III quantities, :mod:`autonomy.metrics.standoff`);
-- ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model.
+- ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model;
+- ``plots/relay.png``: with fusion at a base station, the routes to it (each UAV's next hop, drawn every 10 s over the
+  flown paths) and each UAV's route probability β over time with the packets lost.
 """
 
 from __future__ import annotations
@@ -129,7 +131,7 @@ def write_plots(run_dir: str | Path) -> list[Path]:
         fig.savefig(written[-1])
         plt.close(fig)
     world = _world(run_dir)
-    for draw in (_standoff_plot, _links_plot):
+    for draw in (_standoff_plot, _links_plot, _relay_plot):
         path = draw(plt, rec, world, plots)
         if path is not None:
             written.append(path)
@@ -226,6 +228,55 @@ def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) 
     ax.legend(fontsize=8)
     fig.tight_layout()
     path = plots / "links.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _relay_plot(plt: object, rec: RunRecord, world: object | None, plots: Path, every_s: float = 10.0) -> Path | None:
+    if world is None or world.comms.base_station is None or "routing" not in rec.streams \
+            or "uav_truth" not in rec.streams:
+        return None
+    ro, ut = rec.streams["routing"], rec.streams["uav_truth"]
+    base = np.asarray(world.comms.base_station[:2], dtype=float)
+    uavs = sorted(int(u) for u in np.unique(ut["uav"]))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.5), dpi=110, gridspec_kw={"width_ratios": [1, 1.2]})
+    if "vehicle_truth" in rec.streams:
+        vt = rec.streams["vehicle_truth"]
+        ax.plot(vt["x"], vt["y"], "k-", lw=1.5, label="target")
+    for u in uavs:
+        d = _by(ut, "uav", u)
+        ax.plot(d["x"], d["y"], color=_COLORS[u % len(_COLORS)], lw=1.0, label=world.uavs[u].id)
+    ax.plot(*base, "ks", ms=9, label="base station")
+    times = np.unique(ro["t"])
+    for tk in times[np.isclose(np.mod(times, every_s), 0.0) | (times == times[0])]:
+        at = ro["t"] == tk
+        xy = _uav_xy_on(ut, uavs, np.array([tk]))[0]
+        for u, par in zip(ro["uav"][at], ro["parent"][at], strict=True):
+            if par == -2:
+                continue
+            end = base if par == -1 else xy[uavs.index(int(par))]
+            ax.annotate("", xy=end, xytext=xy[uavs.index(int(u))],
+                        arrowprops={"arrowstyle": "->", "color": _COLORS[int(u) % len(_COLORS)], "lw": 0.8,
+                                    "alpha": 0.7})
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"routes to the base station ({world.comms.routing}), every {every_s:g} s")
+    for u in sorted(int(k) for k in np.unique(ro["uav"])):
+        d = _by(ro, "uav", u)
+        c = _COLORS[u % len(_COLORS)]
+        lost = d["sent"].astype(bool) & ~d["delivered"].astype(bool)
+        bx.plot(d["t"], d["beta"], color=c, lw=1.1, label=f"{world.uavs[u].id} β (mean {d['beta'].mean():.2f})")
+        bx.plot(d["t"][lost], d["beta"][lost], "x", color=c, ms=5)
+    bx.set_ylim(-0.03, 1.03)
+    bx.set_xlabel("time (s)")
+    bx.set_ylabel("route probability β")
+    bx.set_title("route probability to the base (×: packet lost)")
+    bx.grid(alpha=0.3)
+    bx.legend(fontsize=8)
+    fig.tight_layout()
+    path = plots / "relay.png"
     fig.savefig(path)
     plt.close(fig)
     return path

@@ -192,11 +192,7 @@ def _standoff_plot(plt: object, rec: RunRecord, world: object | None, plots: Pat
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.tight_layout()
-    path = plots / "standoff.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, plots / "standoff.png")
 
 
 def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) -> Path | None:
@@ -220,14 +216,23 @@ def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) 
     fig, ax = plt.subplots(figsize=(9, 3.2), dpi=110)
     for k, (i, j) in enumerate(pairs):
         ax.plot(t, pr[:, k], lw=1.1, label=f"{names[i]}–{names[j]} (mean {pr[:, k].mean():.2f})")
+    _probability_axis(ax, "delivery probability",
+                      "radio links: delivery probability of the channel model at the flown geometry")
+    return _save(plt, fig, plots / "links.png")
+
+
+def _probability_axis(ax: object, ylabel: str, title: str) -> None:
+    """A probability over time: [0, 1] with a margin, labels, grid, legend."""
     ax.set_ylim(-0.03, 1.03)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("delivery probability")
-    ax.set_title("radio links: delivery probability of the channel model at the flown geometry")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
+
+
+def _save(plt: object, fig: object, path: Path) -> Path:
     fig.tight_layout()
-    path = plots / "links.png"
     fig.savefig(path)
     plt.close(fig)
     return path
@@ -269,17 +274,8 @@ def _relay_plot(plt: object, rec: RunRecord, world: object | None, plots: Path, 
         lost = d["sent"].astype(bool) & ~d["delivered"].astype(bool)
         bx.plot(d["t"], d["beta"], color=c, lw=1.1, label=f"{world.uavs[u].id} β (mean {d['beta'].mean():.2f})")
         bx.plot(d["t"][lost], d["beta"][lost], "x", color=c, ms=5)
-    bx.set_ylim(-0.03, 1.03)
-    bx.set_xlabel("time (s)")
-    bx.set_ylabel("route probability β")
-    bx.set_title("route probability to the base (×: packet lost)")
-    bx.grid(alpha=0.3)
-    bx.legend(fontsize=8)
-    fig.tight_layout()
-    path = plots / "relay.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    _probability_axis(bx, "route probability β", "route probability to the base (×: packet lost)")
+    return _save(plt, fig, plots / "relay.png")
 
 
 def _draw_tracks(ax: object, rec: RunRecord) -> None:

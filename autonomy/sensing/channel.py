@@ -219,17 +219,24 @@ def scheduled_links(nodes: Sequence[str], links: Iterable[tuple[str, str]] | Non
     return up
 
 
-def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
-    """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
-
-    A link with ``Pr = 0`` is absent; nodes in another component than the root get no route.
-    """
+def _tree_inputs(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> tuple[tuple[str, ...],
+                                                                                          np.ndarray]:
+    """``nodes`` as a tuple and the (N, N) link probabilities as floats, checked against each other and ``root``."""
     nodes = tuple(nodes)
     P = np.asarray(link_probability, dtype=float)
     if P.shape != (len(nodes), len(nodes)):
         raise ValueError(f"link_probability must be ({len(nodes)}, {len(nodes)}), got {P.shape}")
     if root not in nodes:
         raise ValueError(f"root {root!r} is not among the nodes {nodes}")
+    return nodes, P
+
+
+def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
+    """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
+
+    A link with ``Pr = 0`` is absent; nodes in another component than the root get no route.
+    """
+    nodes, P = _tree_inputs(nodes, link_probability, root)
     with np.errstate(divide="ignore"):
         w = np.where(P > 0, -np.log(np.clip(P, 1e-300, 1.0)) + 1e-12, 0.0)  # csgraph treats 0 as no edge
     np.fill_diagonal(w, 0.0)
@@ -249,12 +256,7 @@ def chain_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) 
     """The fixed relay chain: the nodes after ``root`` in the order of ``nodes`` each relay through the one before
     them, the first straight to ``root`` (A_k → A_{k−1} → … → A_1 → B). Every node keeps its route; a hop with
     ``Pr = 0`` makes its route probability 0."""
-    nodes = tuple(nodes)
-    P = np.asarray(link_probability, dtype=float)
-    if P.shape != (len(nodes), len(nodes)):
-        raise ValueError(f"link_probability must be ({len(nodes)}, {len(nodes)}), got {P.shape}")
-    if root not in nodes:
-        raise ValueError(f"root {root!r} is not among the nodes {nodes}")
+    nodes, P = _tree_inputs(nodes, link_probability, root)
     parent: dict[str, str | None] = {root: None}
     previous = root
     for n in nodes:

@@ -239,23 +239,19 @@ def physics_cross_check(ctx: ReproContext) -> tuple[tuple[Table, ...], tuple[Fin
                      ("base error (m)", "–", mean_ci([r["base_error"] for r in s3]).text())))
 
     findings = []
-    d = _paired(phys[("1", "A")], phys[("1", "B")], lambda r: r["base_error"])
-    findings.append(Finding(
-        claim="On quadrotors (physics world), the base station's estimate is better with communication optimisation",
-        verdict=_verdict(d, -1), why=f"A − B base error, paired by run seed: {d.text()} m (paper ×{s:g}: "
-                                     f"{s * (1.2778 - 1.6287):.3f} m; rule: the 95 % interval below 0)"))
-    d = _paired(phys[("1", "A")], phys[("1", "B")], lambda r: float(np.mean(r["beta"])))
-    findings.append(Finding(
-        claim="On quadrotors, the route probability β is higher with communication optimisation",
-        verdict=_verdict(d, +1), why=f"A − B team-mean β, paired: {d.text(2)} (paper: "
-                                     f"{np.mean(paper2['A'][3:]) - np.mean(paper2['B'][3:]):.2f}; rule: the 95 % "
-                                     "interval above 0)"))
-    d = _paired(phys[("1", "A")], phys[("1", "B")], lambda r: float(np.nanmean(r["uav_error"])))
-    findings.append(Finding(
-        claim="On quadrotors, the UAVs' own estimates are slightly worse with communication optimisation",
-        verdict=_verdict(d, +1), why=f"A − B mean UAV error, paired: {d.text()} m (paper ×{s:g}: "
-                                     f"{s * (np.mean(paper2['A'][1:3]) - np.mean(paper2['B'][1:3])):.3f} m; rule: "
-                                     "the 95 % interval above 0)"))
+    uav_gap = s * (np.mean(paper2["A"][1:3]) - np.mean(paper2["B"][1:3]))
+    beta_gap = np.mean(paper2["A"][3:]) - np.mean(paper2["B"][3:])
+    for claim, key, sign, unit, paper in (
+            ("On quadrotors (physics world), the base station's estimate is better with communication optimisation",
+             lambda r: r["base_error"], -1, " m", f"paper ×{s:g}: {s * (1.2778 - 1.6287):.3f} m"),
+            ("On quadrotors, the route probability β is higher with communication optimisation",
+             lambda r: float(np.mean(r["beta"])), +1, "", f"paper: {beta_gap:.2f}"),
+            ("On quadrotors, the UAVs' own estimates are slightly worse with communication optimisation",
+             lambda r: float(np.nanmean(r["uav_error"])), +1, " m", f"paper ×{s:g}: {uav_gap:.3f} m")):
+        d = _paired(phys[("1", "A")], phys[("1", "B")], key)
+        findings.append(Finding(claim=claim, verdict=_verdict(d, sign),
+                                why=f"A − B, paired by run seed: {d.text()}{unit} ({paper}; rule: the 95 % interval "
+                                    f"{'below' if sign < 0 else 'above'} 0)"))
     swaps = [_swaps(r["patterns"]) for r in phys[("1", "A")]]
     first = phys[("1", "A")][0]["patterns"] if phys[("1", "A")] else []
     findings.append(Finding(

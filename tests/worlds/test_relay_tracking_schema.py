@@ -10,30 +10,29 @@ from worlds.errors import WorldError
 from worlds.loader import load_world
 
 RADAR = "{type: radar, rate_hz: 1, sigma_range: 2, sigma_azimuth_deg: 3, min_detectable_velocity: 0}"
-TEAM = f"""\
-name: team
-comms: {{model: rayleigh, block_by_buildings: false, base_station: [-500, -800, 20], gamma: 20}}
-uavs:
-  - id: u1
-    initial: {{position: [0, 0, 50]}}
+PLAN = "infoplan: {d_safe: 30, horizon: 2, heading_rates: 5}"
+
+
+def _uav(uid: str, x: float, altitude: float) -> str:
+    return f"""\
+  - id: {uid}
+    initial: {{position: [{x:g}, 0, {altitude:g}]}}
     sensors:
       - {RADAR}
     autonomy:
       rate_hz: 1
       estimator: {{type: scif, params: {{q: 0.01}}}}
       fusion: {{method: base_station}}
-      guidance: {{type: infoplan, speed: 15, altitude: 50, infoplan: {{d_safe: 30, horizon: 2, heading_rates: 5}}}}
-  - id: u2
-    initial: {{position: [50, 0, 60]}}
-    sensors:
-      - {RADAR}
-    autonomy:
-      rate_hz: 1
-      estimator: {{type: scif, params: {{q: 0.01}}}}
-      fusion: {{method: base_station}}
-      guidance: {{type: infoplan, speed: 15, altitude: 60, infoplan: {{d_safe: 30, horizon: 2, heading_rates: 5}}}}
+      guidance: {{type: infoplan, speed: 15, altitude: {altitude:g}, {PLAN}}}
 """
-U2_PLAN = "altitude: 60, infoplan: {d_safe: 30, horizon: 2, heading_rates: 5}"
+
+
+TEAM = """\
+name: team
+comms: {model: rayleigh, block_by_buildings: false, base_station: [-500, -800, 20], gamma: 20}
+uavs:
+""" + _uav("u1", 0, 50) + _uav("u2", 50, 60)
+U2_PLAN = f"altitude: 60, {PLAN}"
 
 
 def write(tmp_path: Path, text: str) -> Path:

@@ -126,7 +126,9 @@ def _estimate(res: InfoLoopResult, planner: InfoPlannerConfig, rng: np.random.Ge
 
 def _one(job: _Job) -> _Out:
     planner, loop = _scenario(job)
-    rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(int(job.key), hash(job.variant) % 997)))
+    # the variant's place in VARIANTS, not hash(): string hashes change from one interpreter to the next
+    rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(int(job.key), list(VARIANTS).index(
+        job.variant))))
     res = run_info_loop(planner, loop, rng)
     b, u, bt, ut = _estimate(res, planner, rng)
     return _Out(job=job, base_err=b, uav_err=u, beta=res.beta.mean(axis=0), base_trace=bt, uav_trace=ut,

@@ -13,6 +13,7 @@ import pybullet as p
 from autonomy.agent import Agent
 from autonomy.estimation.setmem.tracker import SetMembershipTracker
 from autonomy.estimation.tracker import SingleTargetTracker
+from autonomy.fusion.base_station import InformationReporter
 from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam
 from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
@@ -102,6 +103,7 @@ class Assembly:
     shared_received: dict[int, int] = field(default_factory=dict)  # per UAV: teammates' detections delivered to it
     decoys: StaticDecoys | None = None
     search: SearchTeamRun | None = None
+    base_station: Any = None  # simulator.base_station.BaseStation when UAVs fuse at the base (paper 001)
 
     # -- truth ---------------------------------------------------------------------------------------------------
     def target_truth(self) -> TargetTruth:
@@ -272,8 +274,6 @@ class Assembly:
         team = self._team_step(t, tick, [a for a in agents if a.hcmci])  # 5. agents: the consensus team estimates,
         searched = self.search.step(self, t, tick, [a for a in agents if a.search]) if self.search else {}
         for a in agents:  # the search team runs its whole step; then every other agent fuses and plans
-            if self.channel is not None:
-                self._broadcast_state(a.uav, t, tick)
             mates, shared = self.inbox(a.uav, t, tick)
             own = self.own_state(a.uav, t)
             if a.uav in searched:
@@ -283,12 +283,16 @@ class Assembly:
             else:
                 result = a.agent.step(t, own, mates, shared if a.agent.fusion is not None else ())
             self.quads.set_command(a.uav, _to_command(result.setpoint))
+            if self.channel is not None:  # after planning, so the plan sent starts from the state sent
+                self._broadcast_state(a.uav, t, tick)
             if self._sharing:
                 self._share_estimate(a.uav, result.local_estimate, t, tick)
             self.latest_estimates[a.uav] = result.estimate
             self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint
             self._record_agent(tick, t, a.uav, result)
+        if self.base_station is not None and agents:  # their scans' information goes to the base over the radio
+            self.base_station.step(tick, t, self._positions(self.quads.state), [a.uav for a in agents])
         t5 = clock()
         wall["autonomy"] += t5 - t4
         if self._outage_ticks:
@@ -462,11 +466,15 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
             guidance = options.guidance_factory(i, u)
         else:
             guidance = _checked(loaded, f"uavs[{i}].autonomy.guidance", u.autonomy.guidance,
-                                lambda: build_guidance(u, i, len(world.uavs), geometry.buildings, estimator))
+                                lambda: build_guidance(u, i, len(world.uavs), geometry.buildings, world.comms,
+                                                       estimator))
         fusion, f = None, u.autonomy.fusion
         if f.method == "hcmci":
-            _check_consensus_estimator(loaded, i, estimator)
+            _check_information_tracker(loaded, i, estimator, f.method)
             team = HcmciTeam(HcmciConfig(rounds=f.rounds, gain=f.b))  # one config for all: worlds.checks
+        elif f.method == "base_station":
+            _check_information_tracker(loaded, i, estimator, f.method)
+            estimator = InformationReporter(estimator)
         elif f.method not in ("none", "measurements", "sets"):
             fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
@@ -477,12 +485,13 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) ->
                     hcmci=team)
 
 
-def _check_consensus_estimator(loaded: LoadedWorld, i: int, estimator: Any) -> None:
-    """HCMCI needs the built-in tracker with the information filter (also when an estimator was passed in code)."""
+def _check_information_tracker(loaded: LoadedWorld, i: int, estimator: Any, method: str) -> None:
+    """HCMCI and base-station fusion need the built-in tracker with the information filter (also when an estimator was
+    passed in code)."""
     if not (isinstance(estimator, SingleTargetTracker) and estimator.config.filter == "scif"):
         raise WorldError(str(loaded.path), [WorldIssue(
             f"uavs[{i}].autonomy.estimator", type(estimator).__name__,
-            "the built-in tracker with the scif filter: fusion method hcmci fuses its information")])
+            f"the built-in tracker with the scif filter: fusion method {method} fuses its information")])
 
 
 def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Any) -> Any:
@@ -497,6 +506,7 @@ def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Any) -> Any:
 
 def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> Assembly:
     """Start PyBullet and build the scene and the fleets of a prepared world."""
+    from simulator.base_station import build_base_station
     from simulator.factories import build_car_fleet, build_channel, fleet_options
     from vehicles.quadrotor.airframes import load_airframe
     from vehicles.quadrotor.fleet import QuadrotorFleet
@@ -529,12 +539,13 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     decoys = build_decoys(world.decoys, scene, CAR_RGBA)
     query = PybulletSceneQuery(scene.client, scene.occluders)
     outage_ticks = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
+    channel = build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query)
     return Assembly(clock=clock, scene=scene, recorder=recorder, buildings=geometry.buildings,
                     network=geometry.network, quads=quads, cars=cars, uav_ids=uav_ids,
                     car_ids=car_ids, car_kinds=car_kinds,
                     target_index=car_ids.index(target_ids[0]) if target_ids else None,
                     scene_query=query, sensors=prep.sensors, agents=prep.agents, world_spec=world,
-                    channel=build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query),
+                    channel=channel, base_station=build_base_station(world, prep.agents, channel, recorder),
                     _outage_ticks=outage_ticks, hcmci=prep.hcmci,
                     _sharing=any(a.agent.fusion is not None for a in prep.agents),
                     record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"), decoys=decoys,

@@ -84,6 +84,11 @@ def _print_summary(metrics: dict, out: Path) -> None:
             for sub, inner in vals.items():
                 if isinstance(inner, dict):
                     print(f"    {sub}: {shown(inner)}")
+    base = metrics.get("base_station")
+    if base:
+        print(f"  base station: {shown(base)}")
+        for name, vals in (base.get("uavs") or {}).items():
+            print(f"    {name}: {shown(vals)}")
 
 
 def _worlds(args: argparse.Namespace) -> int:

@@ -13,8 +13,8 @@ from typing import Any
 from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
 from autonomy.guidance.waypoints import WaypointConfig, WaypointGuidance
 from simulator.plugins import load_plugin
-from worlds.schema import (BearingSpec, BoxSpec, CameraSpec, FormationSpec, FovSpec, ImmSpec, RadarSpec, SearchSpec,
-                           UavSpec, World)
+from worlds.schema import (BearingSpec, BoxSpec, CameraSpec, CommsSection, FormationSpec, FovSpec, ImmSpec,
+                           InfoPlanSpec, RadarSpec, SearchSpec, UavSpec, World)
 
 __all__ = [
     "build_car_fleet",
@@ -22,6 +22,7 @@ __all__ = [
     "build_channel",
     "build_guidance",
     "build_sensor",
+    "channel_config",
     "fleet_options",
 ]
 
@@ -121,8 +122,10 @@ def search_free_area(area: tuple[float, float, float, float], buildings: Any) ->
     return free_search_area(shapely.box(*area), buildings)
 
 
-def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any, estimator: Any = None) -> Any:
-    """The UAV's guidance law from its world-file entry (``estimator``: the UAV's own, which the search law reads)."""
+def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any, comms: CommsSection | None = None,
+                   estimator: Any = None) -> Any:
+    """The UAV's guidance law from its world-file entry (``comms``: the world's radio, for guidance that plans over
+    it; ``estimator``: the UAV's own, which the search law reads)."""
     g = uav.autonomy.guidance
     if g.type == "plugin":
         cls = load_plugin(g.plugin, f"uavs[{index}].autonomy.guidance.plugin", ("command",))
@@ -146,6 +149,8 @@ def build_guidance(uav: UavSpec, index: int, team_size: int, buildings: Any, est
         return _formation(uav, index, team_size)
     if g.type == "search":
         return _search(uav, buildings, estimator)
+    if g.type == "infoplan":
+        return _infoplan(uav, index, comms if comms is not None else CommsSection())
     if g.type == "fast_mpc":
         from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
 
@@ -202,18 +207,47 @@ def _search(uav: UavSpec, buildings: Any, estimator: Any) -> Any:
                                        max_speed=load_airframe(uav.airframe).max_speed)
 
 
-def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:
-    """The radio channel of the ``comms`` section, or None for perfect communication."""
-    comms = world.comms
-    if comms.model == "perfect":
-        return None
-    from autonomy.sensing.channel import Channel, ChannelConfig, LinkOutage
+def _infoplan(uav: UavSpec, index: int, comms: CommsSection) -> Any:
+    """Paper 001's information planner as UAV ``index``'s guidance (:class:`InfoPlanSpec`; the radar, base station
+    and radio are the world's: ``worlds.checks`` makes sure they exist)."""
+    from autonomy.guidance.infoplan.config import InfoPlannerConfig
+    from autonomy.guidance.infoplan.guidance import InfoPlannerGuidance
 
-    given = comms.model_dump(exclude_none=True, exclude={"model", "base_station", "outages", "links"})
+    g = uav.autonomy.guidance
+    plan = g.infoplan if g.infoplan is not None else InfoPlanSpec()
+    radar = next(s for s in uav.sensors if isinstance(s, RadarSpec))
+    if comms.base_station is None:
+        raise ValueError("guidance infoplan needs comms.base_station")
+    cfg = InfoPlannerConfig(base_p_W=tuple(comms.base_station[:2]), dt=1.0 / uav.autonomy.rate_hz,
+                            horizon=plan.horizon, speed=g.speed, max_heading_rate=math.radians(
+                                plan.max_heading_rate_deg_s), n_heading_rates=plan.heading_rates,
+                            sigma_range=radar.sigma_range, sigma_bearing=math.radians(radar.sigma_azimuth_deg),
+                            target_accel_std=plan.target_accel_std, channel=channel_config(comms),
+                            d_safe=plan.d_safe, objective=plan.objective, routing=plan.routing or comms.routing,
+                            criterion=plan.criterion, search=plan.search, sweeps=plan.sweeps, altitude=g.altitude,
+                            **g.params)
+    return InfoPlannerGuidance(cfg, uav_id=index)
+
+
+def channel_config(comms: CommsSection) -> Any:
+    """The :class:`~autonomy.sensing.channel.ChannelConfig` of the ``comms`` section (fields left out take the
+    channel's defaults): the radio's link model, also for planners that weigh links by it."""
+    from autonomy.sensing.channel import ChannelConfig, LinkOutage
+
+    given = comms.model_dump(exclude_none=True, exclude={"model", "base_station", "routing", "outages", "links"})
     outages = tuple(LinkOutage(node_a=o.link[0], node_b=o.link[1], start_s=o.start_s, end_s=o.end_s)
                     for o in comms.outages)
     links = None if comms.links is None else tuple(tuple(pair) for pair in comms.links)
-    return Channel(ChannelConfig(**given, outages=outages, links=links), physics_hz, rng, scene)
+    return ChannelConfig(**given, outages=outages, links=links)
+
+
+def build_channel(world: World, physics_hz: int, rng: Any, scene: Any) -> Any:
+    """The radio channel of the ``comms`` section, or None for perfect communication."""
+    if world.comms.model == "perfect":
+        return None
+    from autonomy.sensing.channel import Channel
+
+    return Channel(channel_config(world.comms), physics_hz, rng, scene)
 
 
 def fleet_options(world: World) -> Any:

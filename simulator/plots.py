@@ -7,7 +7,9 @@
   over time (paper 002's Table III quantities, :mod:`autonomy.metrics.standoff`);
 - ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model;
 - ``plots/search.png``: with a set-membership search team, the set areas over time and the sets on the map
-  (:mod:`simulator.plots_search`).
+  (:mod:`simulator.plots_search`);
+- ``plots/relay.png``: with fusion at a base station, the routes to it (each UAV's next hop, drawn every 10 s over the
+  flown paths) and each UAV's route probability β over time with the packets lost.
 """
 
 from __future__ import annotations
@@ -132,7 +134,7 @@ def write_plots(run_dir: str | Path) -> list[Path]:
         fig.savefig(written[-1])
         plt.close(fig)
     world = _world(run_dir)
-    for draw in (_standoff_plot, _links_plot, search_plot):
+    for draw in (_standoff_plot, _links_plot, _relay_plot, search_plot):
         path = draw(plt, rec, world, plots)
         if path is not None:
             written.append(path)
@@ -193,11 +195,7 @@ def _standoff_plot(plt: object, rec: RunRecord, world: object | None, plots: Pat
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.tight_layout()
-    path = plots / "standoff.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, plots / "standoff.png")
 
 
 def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) -> Path | None:
@@ -221,17 +219,66 @@ def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) 
     fig, ax = plt.subplots(figsize=(9, 3.2), dpi=110)
     for k, (i, j) in enumerate(pairs):
         ax.plot(t, pr[:, k], lw=1.1, label=f"{names[i]}–{names[j]} (mean {pr[:, k].mean():.2f})")
+    _probability_axis(ax, "delivery probability",
+                      "radio links: delivery probability of the channel model at the flown geometry")
+    return _save(plt, fig, plots / "links.png")
+
+
+def _probability_axis(ax: object, ylabel: str, title: str) -> None:
+    """A probability over time: [0, 1] with a margin, labels, grid, legend."""
     ax.set_ylim(-0.03, 1.03)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("delivery probability")
-    ax.set_title("radio links: delivery probability of the channel model at the flown geometry")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
+
+
+def _save(plt: object, fig: object, path: Path) -> Path:
     fig.tight_layout()
-    path = plots / "links.png"
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def _relay_plot(plt: object, rec: RunRecord, world: object | None, plots: Path, every_s: float = 10.0) -> Path | None:
+    if world is None or world.comms.base_station is None or "routing" not in rec.streams \
+            or "uav_truth" not in rec.streams:
+        return None
+    ro, ut = rec.streams["routing"], rec.streams["uav_truth"]
+    base = np.asarray(world.comms.base_station[:2], dtype=float)
+    uavs = sorted(int(u) for u in np.unique(ut["uav"]))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.5), dpi=110, gridspec_kw={"width_ratios": [1, 1.2]})
+    if "vehicle_truth" in rec.streams:
+        vt = rec.streams["vehicle_truth"]
+        ax.plot(vt["x"], vt["y"], "k-", lw=1.5, label="target")
+    for u in uavs:
+        d = _by(ut, "uav", u)
+        ax.plot(d["x"], d["y"], color=_COLORS[u % len(_COLORS)], lw=1.0, label=world.uavs[u].id)
+    ax.plot(*base, "ks", ms=9, label="base station")
+    times = np.unique(ro["t"])
+    for tk in times[np.isclose(np.mod(times, every_s), 0.0) | (times == times[0])]:
+        at = ro["t"] == tk
+        xy = _uav_xy_on(ut, uavs, np.array([tk]))[0]
+        for u, par in zip(ro["uav"][at], ro["parent"][at], strict=True):
+            if par == -2:
+                continue
+            end = base if par == -1 else xy[uavs.index(int(par))]
+            ax.annotate("", xy=end, xytext=xy[uavs.index(int(u))],
+                        arrowprops={"arrowstyle": "->", "color": _COLORS[int(u) % len(_COLORS)], "lw": 0.8,
+                                    "alpha": 0.7})
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"routes to the base station ({world.comms.routing}), every {every_s:g} s")
+    for u in sorted(int(k) for k in np.unique(ro["uav"])):
+        d = _by(ro, "uav", u)
+        c = _COLORS[u % len(_COLORS)]
+        lost = d["sent"].astype(bool) & ~d["delivered"].astype(bool)
+        bx.plot(d["t"], d["beta"], color=c, lw=1.1, label=f"{world.uavs[u].id} β (mean {d['beta'].mean():.2f})")
+        bx.plot(d["t"][lost], d["beta"][lost], "x", color=c, ms=5)
+    _probability_axis(bx, "route probability β", "route probability to the base (×: packet lost)")
+    return _save(plt, fig, plots / "relay.png")
 
 
 def _draw_tracks(ax: object, rec: RunRecord) -> None:

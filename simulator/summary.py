@@ -15,7 +15,12 @@
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses; under HCMCI the UAV's
-  own estimate is its consensus posterior).
+  own estimate is its consensus posterior);
+- ``base_station`` (UAVs fusing at a base station, paper 001): base steps, packets sent / delivered / lost / late /
+  fused and the delivery ratio; per fusing UAV (``uavs.<id>``) the mean route probability β, mean hop count, packets
+  sent and delivered, delivery ratio and the steps at which it relayed for another UAV; and the base's own estimate
+  against truth at its steps (position and velocity error mean and RMSE, fraction of steps with an estimate), as for
+  a UAV (:mod:`simulator.base_station`).
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ class MetricsTracker:
         self.asm: Any = None
         self.errors: dict[int, _Errors] = defaultdict(_Errors)
         self.fused_errors: dict[int, _Errors] = defaultdict(_Errors)
+        self.base_errors = _Errors()
         self.min_sep: np.ndarray | None = None
         self.standoff_err: dict[int, list[float]] = defaultdict(list)
         self.phase_err: list[float] = []
@@ -85,6 +91,9 @@ class MetricsTracker:
                 self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
                 if slots[i].agent.fusion is not None:
                     self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
+            base = getattr(asm, "base_station", None)
+            if base is not None and base.last_tick == tick:
+                self._error(self.base_errors, base.estimate, p_true, v_true)
             if self.standoffs and asm.quads is not None:
                 q = asm.quads.state.p_W[:, :2]
                 for i in due:
@@ -156,6 +165,8 @@ class MetricsTracker:
                                 else None}
         if getattr(asm, "search", None) is not None:
             out["search"] = asm.search.summary()
+        if getattr(asm, "base_station", None) is not None:
+            out["base_station"] = {**asm.base_station.summary(), **self.base_errors.summary()}
         if asm.channel is not None:
             cs = asm.channel.stats
             out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,

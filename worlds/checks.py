@@ -6,7 +6,7 @@ from collections import Counter
 from fractions import Fraction
 
 from worlds.errors import WorldIssue
-from worlds.schema import World
+from worlds.schema import InfoPlanSpec, World
 
 __all__ = ["check_world", "rate_divisor"]
 
@@ -81,6 +81,7 @@ def check_world(world: World) -> list[WorldIssue]:
     issues.extend(_hcmci_issues(world))
     issues.extend(_formation_imm_issues(world))
     issues.extend(_search_issues(world))
+    issues.extend(_relay_issues(world))
     uav_ids = {u.id for u in world.uavs} | {"base"}
     for i, o in enumerate(world.comms.outages):
         if o.end_s <= o.start_s:
@@ -89,11 +90,13 @@ def check_world(world: World) -> list[WorldIssue]:
             if node not in uav_ids:
                 issues.append(WorldIssue(f"comms.outages[{i}].link[{k}]", node,
                                          f"a UAV id or 'base' ({sorted(uav_ids)})"))
+    link_nodes = uav_ids if world.comms.base_station is not None else uav_ids - {"base"}
     for i, pair in enumerate(world.comms.links or []):
         for k, node in enumerate(pair):
-            if node not in uav_ids - {"base"}:
+            if node not in link_nodes:
                 issues.append(WorldIssue(f"comms.links[{i}][{k}]", node,
-                                         f"a UAV id ({sorted(uav_ids - {'base'})})"))
+                                         f"a UAV id{' or base' if 'base' in link_nodes else ''} "
+                                         f"({sorted(link_nodes)})"))
         if pair[0] == pair[1]:
             issues.append(WorldIssue(f"comms.links[{i}]", list(pair), "two different UAV ids"))
     return issues
@@ -243,4 +246,89 @@ def _search_issues(world: World) -> list[WorldIssue]:
                                          f"at least the fastest street's speed limit ({limit:g} m/s, "
                                          f"roads.streets[{fastest}]): the sets hold the targets only if none "
                                          "moves faster than the bound"))
+    return issues
+
+
+MOTION_PARAMS = ("q", "singer_alpha", "singer_sigma_a")
+"""Tracker parameters of the motion model (``TrackerConfig``): the base station predicts with the UAVs' model."""
+
+
+def _relay_issues(world: World) -> list[WorldIssue]:
+    """Paper 001's pieces. Fusion method ``base_station``: the ``scif`` estimator (its scan information is what is
+    sent), a base position and a radio to send over, and one motion model for the base to predict with (the fusing
+    UAVs' ``model`` and motion parameters). Guidance ``infoplan``: its settings only with it; a radar for the noise;
+    the base position; the radio's link model unless the objective ignores the routes (``routing: none``), and routes
+    that are the radio's; every UAV of the world in the team with one planner configuration (each UAV plans the whole
+    team, so they must agree)."""
+    issues: list[WorldIssue] = []
+    comms = world.comms
+
+    def add(path: str, value: object, expected: str) -> None:
+        if all(i.path != path for i in issues):
+            issues.append(WorldIssue(path, value, expected))
+
+    fusing = [i for i, u in enumerate(world.uavs) if u.autonomy.fusion.method == "base_station"]
+    for i in fusing:
+        est = world.uavs[i].autonomy.estimator
+        if comms.base_station is None:
+            add("comms.base_station", None, f"the base station's position [x, y, z] (m): uavs[{i}] fuses at the base "
+                                            "station (fusion method base_station)")
+        if comms.model == "perfect":
+            add("comms.model", comms.model, f"a radio model ('rayleigh'): uavs[{i}] sends its scans' information to "
+                                            "the base station over the radio's routes (fusion method base_station)")
+        if est.type != "scif":
+            add(f"uavs[{i}].autonomy.estimator.type", est.type,
+                "scif: fusion method base_station sends the information of the scif filter's scans")
+        first = world.uavs[fusing[0]].autonomy.estimator
+        if est.model != first.model:
+            add(f"uavs[{i}].autonomy.estimator.model", est.model,
+                f"{first.model!r}, the model of uavs[{fusing[0]}]: the base station predicts with one motion model")
+        mine = {k: est.params[k] for k in MOTION_PARAMS if k in est.params}
+        theirs = {k: first.params[k] for k in MOTION_PARAMS if k in first.params}
+        if mine != theirs:
+            add(f"uavs[{i}].autonomy.estimator.params", mine,
+                f"the motion parameters of uavs[{fusing[0]}] ({theirs}): the base station predicts with one model")
+    planners = [i for i, u in enumerate(world.uavs) if u.autonomy.guidance.type == "infoplan"]
+    for i, uav in enumerate(world.uavs):
+        g = uav.autonomy.guidance
+        if g.infoplan is not None and g.type != "infoplan":
+            add(f"uavs[{i}].autonomy.guidance.infoplan", g.infoplan.model_dump(exclude_defaults=True),
+                f"no 'infoplan' settings unless the type is infoplan (type is {g.type!r})")
+        if planners and g.type != "infoplan":
+            add(f"uavs[{i}].autonomy.guidance.type", g.type,
+                f"'infoplan': uavs[{planners[0]}] plans the whole team with the information planner, so every UAV of "
+                "the world must fly it")
+    if not planners:
+        return issues
+    ref = world.uavs[planners[0]].autonomy
+    ref_plan = (ref.guidance.infoplan or InfoPlanSpec()).model_dump()
+    for i in planners:
+        auto = world.uavs[i].autonomy
+        where = f"uavs[{i}].autonomy"
+        plan = auto.guidance.infoplan or InfoPlanSpec()
+        if not any(s.type == "radar" for s in world.uavs[i].sensors):
+            add(f"uavs[{i}].sensors", [s.type for s in world.uavs[i].sensors],
+                "a radar: guidance infoplan takes the range and azimuth noise of its information model from it")
+        if comms.base_station is None:
+            add("comms.base_station", None, f"the base station's position [x, y, z] (m): uavs[{i}]'s guidance "
+                                            "infoplan maximises the information delivered to it")
+        routing = plan.routing or comms.routing
+        if routing != "none" and comms.model == "perfect":
+            add("comms.model", comms.model, f"a radio model ('rayleigh'): uavs[{i}]'s guidance infoplan weighs the "
+                                            f"information by the route probabilities of its links ({routing})")
+        if plan.routing not in (None, "none", comms.routing):
+            add(f"{where}.guidance.infoplan.routing", plan.routing,
+                f"{comms.routing!r} (the radio's comms.routing), 'none' or null: the planner models the routes the "
+                "radio uses")
+        if plan.model_dump() != ref_plan:
+            add(f"{where}.guidance.infoplan", plan.model_dump(exclude_defaults=True),
+                f"the infoplan settings of uavs[{planners[0]}] "
+                f"({(ref.guidance.infoplan or InfoPlanSpec()).model_dump(exclude_defaults=True)}): every UAV "
+                "plans the whole team, so they must agree")
+        if auto.guidance.speed != ref.guidance.speed:
+            add(f"{where}.guidance.speed", auto.guidance.speed,
+                f"{ref.guidance.speed} m/s, the speed of uavs[{planners[0]}]: the team plan flies one speed")
+        if auto.rate_hz != ref.rate_hz:
+            add(f"{where}.rate_hz", auto.rate_hz,
+                f"{ref.rate_hz} Hz, the rate of uavs[{planners[0]}]: the team plan's step T_s is the agents' period")
     return issues

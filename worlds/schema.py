@@ -26,6 +26,7 @@ __all__ = [
     "GroundVehicleSpec",
     "GuidanceSpec",
     "ImmSpec",
+    "InfoPlanSpec",
     "InitialPose",
     "JacobiGainsSpec",
     "OsmSection",
@@ -370,8 +371,40 @@ class SearchSpec(Strict):
         return value
 
 
+class InfoPlanSpec(Strict):
+    """Paper 001's communication-aware information planner (``autonomy.guidance.infoplan``): every UAV of the world
+    flies it with the same settings and plans the whole team (UAV i = uavs[i]); the speed is the guidance ``speed``,
+    the altitude its ``altitude``, the step T_s the agent's period, the radar noise (δr, δθ) the UAV's radar's, the base
+    station ``comms.base_station`` and the link model the radio's (``comms``). Defaults: the paper's."""
+
+    routing: Literal["mst", "chain", "none"] | None = Field(
+        None, description="route model of the objective: the radio's minimum spanning tree (mst) or fixed relay chain "
+                          "(chain), or none (β ≡ 1: no communication term, the paper's 'without communication "
+                          "optimisation'); None: the radio's comms.routing")
+    objective: Literal["team", "own"] = Field("team", description="each UAV maximises the team's delivered "
+                                                                  "information (team) or only its own (own, eq. 42)")
+    criterion: Literal["logdet", "trace"] = Field("logdet", description="log det of the base's predicted information "
+                                                                        "(D-optimal) or Σ β tr I (eq. 41)")
+    horizon: int = Field(3, ge=1, description="steps T_p in the horizon")
+    heading_rates: int = Field(7, ge=3, description="size of the heading-rate grid over ±max_heading_rate (odd)")
+    max_heading_rate_deg_s: PositiveFloat = Field(30.0, description="ω_max, deg/s")
+    d_safe: NonNegFloat = Field(100.0, description="planned separation between UAVs, m")
+    target_accel_std: PositiveFloat = Field(0.1, description="target process noise δx = δy of the prediction, m/s^2")
+    search: Literal["sequential", "joint"] = Field("sequential", description="UAVs in hierarchy order (coordinate "
+                                                                             "ascent), or all jointly")
+    sweeps: int = Field(2, ge=1, description="passes of the sequential search")
+
+    @field_validator("heading_rates")
+    @classmethod
+    def _odd(cls, value: int) -> int:
+        if value % 2 == 0:
+            raise ValueError("an odd number (so that straight flight is in the grid)")
+        return value
+
+
 class GuidanceSpec(Strict):
-    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "search", "plugin"] = "hold"
+    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "search", "infoplan",
+                  "plugin"] = "hold"
     plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
     standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
     speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
@@ -381,6 +414,7 @@ class GuidanceSpec(Strict):
                                    description="further fields of the law's config, or keyword arguments of a plugin")
     formation: FormationSpec | None = Field(None, description="type formation: its settings (None: the defaults)")
     search: SearchSpec | None = Field(None, description="type search: its settings (None: the defaults)")
+    infoplan: InfoPlanSpec | None = Field(None, description="type infoplan: its settings (None: the defaults)")
 
     @model_validator(mode="after")
     def _plugin(self) -> GuidanceSpec:
@@ -396,11 +430,15 @@ class FusionSpec(Strict):
     ``autonomy.fusion.hcmci_team``; needs the ``scif`` estimator; the UAVs due at a tick fuse as a team over the radio
     links that are up), raw measurement sharing (``measurements``: ``autonomy.fusion.measurement_sharing``; every
     teammate's detections reach this UAV over the radio, and its tracker stacks them with its own per scan time:
-    paper 003's centralised augmented measurement), or set fusion (``sets``: ``autonomy.fusion.set_team``; needs the
+    paper 003's centralised augmented measurement), set fusion (``sets``: ``autonomy.fusion.set_team``; needs the
     ``set_membership`` estimator; the UAVs due at a tick fuse their sets with the teammates their links reach, paper
-    004's fusion over lines of sight with ``comms.block_by_buildings``)."""
+    004's fusion over lines of sight with ``comms.block_by_buildings``), or fusion at the base station
+    (``base_station``: ``autonomy.fusion.base_station``; needs the ``scif`` estimator, ``comms.base_station`` and a
+    radio model: the UAV runs a local information filter and sends the information of each scan to the base along its
+    route of ``comms.routing``; the base fuses the packets that arrive — paper 001)."""
 
-    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements", "sets"] = "none"
+    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements", "sets",
+                    "base_station"] = "none"
     max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
     q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
     rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")
@@ -465,7 +503,11 @@ class CommsSection(Strict):
                                                               "perfect comms it shapes the graph of the team fusions "
                                                               "(hcmci, sets)")
     latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
-    base_station: Vec3 | None = None
+    base_station: Vec3 | None = Field(None, description="position of the base station (the radio node 'base'), m")
+    routing: Literal["mst", "chain"] = Field(
+        "mst", description="routes to the base station: the minimum spanning tree of link weights −ln Pr at each step "
+                           "(mst), or the fixed relay chain in the order of uavs (chain: uavs[k] relays through "
+                           "uavs[k−1], uavs[0] sends to the base)")
     links: list[tuple[str, str]] | None = Field(
         None, description="the radio graph: only these pairs of UAV ids have a link (None: every pair). Under a radio "
                           "model no message crosses another pair; under perfect comms teammates' states stay known "

@@ -33,7 +33,7 @@ from autonomy.estimation.linalg import psd_sqrt, tria, tria_jit
 from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, measurement_model
 from autonomy.estimation.sigma_point import angle_mean, cubature_points
 
-__all__ = ["SqrtInformation", "SCIF"]
+__all__ = ["SqrtInformation", "SCIF", "add_information"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,6 +50,12 @@ class SqrtInformation:
     def Y(self) -> np.ndarray:
         """Information matrix ``S Sᵀ``."""
         return self.S @ self.S.T
+
+
+def add_information(*parts: SqrtInformation) -> SqrtInformation:
+    """The sum of information pairs: ``S = tria([S_1, S_2, …])`` (so ``S Sᵀ = Σ S_k S_kᵀ``) and ``h = Σ h_k`` — e.g. a
+    prior plus a measurement contribution (the local update), or the contributions of several scans."""
+    return SqrtInformation(tria(np.hstack([p.S for p in parts])), np.sum([p.h for p in parts], axis=0))
 
 
 @numba.njit(cache=True)
@@ -163,5 +169,5 @@ class SCIF(GaussianFilter):
 
     def update_with(self, model: MeasurementModel, z: np.ndarray, R: np.ndarray) -> Innovation:
         info, innov = self._contribution(model, z, R)
-        self.set_information(SqrtInformation(tria(np.hstack([self._S_h, info.S])), self._h + info.h))
+        self.set_information(add_information(self.information_state, info))
         return innov

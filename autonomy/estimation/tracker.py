@@ -41,11 +41,10 @@ from scipy.special import gammaincinv
 
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.factory import make_filter
-from autonomy.estimation.linalg import tria
 from autonomy.estimation.imm import cv_ct_imm
 from autonomy.estimation.measurements import StackedMeasurement, measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
-from autonomy.estimation.scif import SqrtInformation
+from autonomy.estimation.scif import SqrtInformation, add_information
 from autonomy.guidance.types import TargetEstimate
 
 __all__ = ["SingleTargetTracker", "TrackInformation", "TrackerConfig", "make_motion_model"]
@@ -410,7 +409,7 @@ class SingleTargetTracker:
             return None
         if len(deferred) == 1:
             return deferred[0]
-        return SqrtInformation(tria(np.hstack([c.S for c in deferred])), np.sum([c.h for c in deferred], axis=0))
+        return add_information(*deferred)
 
     def _associate(self, dets: Sequence[object]) -> tuple[list, int]:
         """Each sensor's detection of the smallest NIS inside the gate (global nearest neighbour per sensor), in the

@@ -11,7 +11,8 @@ between nodes that are not a pair of a fixed topology ``links``, and during a sc
 
 Routing: the minimum spanning tree over the nodes with edge weights ``-ln Pr`` (the most reliable tree), rooted
 at the base; a node's route is its tree path and its route probability ``beta`` the product of the hop
-probabilities. Erasures are independent per hop; each hop adds ``latency_s``.
+probabilities. Erasures are independent per hop; each hop adds ``latency_s``. The fixed relay chain (paper 001's
+baseline, :func:`chain_routes`) routes each node through the one listed before it, whatever the link qualities.
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
 from .messages import Envelope, Message
 from .scene import SceneQuery
 
-__all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "minimum_spanning_tree_routes",
-           "outage_holds", "scheduled_links"]
+__all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "chain_routes",
+           "minimum_spanning_tree_routes", "outage_holds", "scheduled_links"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -218,17 +219,24 @@ def scheduled_links(nodes: Sequence[str], links: Iterable[tuple[str, str]] | Non
     return up
 
 
-def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
-    """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
-
-    A link with ``Pr = 0`` is absent; nodes in another component than the root get no route.
-    """
+def _tree_inputs(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> tuple[tuple[str, ...],
+                                                                                          np.ndarray]:
+    """``nodes`` as a tuple and the (N, N) link probabilities as floats, checked against each other and ``root``."""
     nodes = tuple(nodes)
     P = np.asarray(link_probability, dtype=float)
     if P.shape != (len(nodes), len(nodes)):
         raise ValueError(f"link_probability must be ({len(nodes)}, {len(nodes)}), got {P.shape}")
     if root not in nodes:
         raise ValueError(f"root {root!r} is not among the nodes {nodes}")
+    return nodes, P
+
+
+def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
+    """Spanning tree minimising ``sum -ln Pr`` over its links, rooted at ``root``.
+
+    A link with ``Pr = 0`` is absent; nodes in another component than the root get no route.
+    """
+    nodes, P = _tree_inputs(nodes, link_probability, root)
     with np.errstate(divide="ignore"):
         w = np.where(P > 0, -np.log(np.clip(P, 1e-300, 1.0)) + 1e-12, 0.0)  # csgraph treats 0 as no edge
     np.fill_diagonal(w, 0.0)
@@ -241,6 +249,19 @@ def minimum_spanning_tree_routes(nodes: Sequence[str], link_probability: np.ndar
     for k in order:
         if k != r and pred[k] >= 0:
             parent[nodes[k]] = nodes[pred[k]]
+    return RoutingTree(nodes=nodes, root=root, parent=parent, link_probability=P)
+
+
+def chain_routes(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> RoutingTree:
+    """The fixed relay chain: the nodes after ``root`` in the order of ``nodes`` each relay through the one before
+    them, the first straight to ``root`` (A_k → A_{k−1} → … → A_1 → B). Every node keeps its route; a hop with
+    ``Pr = 0`` makes its route probability 0."""
+    nodes, P = _tree_inputs(nodes, link_probability, root)
+    parent: dict[str, str | None] = {root: None}
+    previous = root
+    for n in nodes:
+        if n != root:
+            parent[n], previous = previous, n
     return RoutingTree(nodes=nodes, root=root, parent=parent, link_probability=P)
 
 
@@ -318,10 +339,12 @@ class Channel:
         return up | up.T
 
     def routing_tree(
-        self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], root: str, tick: int
+        self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], root: str, tick: int, chain: bool = False
     ) -> RoutingTree:
-        """Minimum spanning tree routes to ``root`` at ``tick``."""
-        return minimum_spanning_tree_routes(nodes, self.link_matrix(nodes, positions, tick), root)
+        """Minimum spanning tree routes to ``root`` at ``tick``; with ``chain``, the fixed relay chain over ``nodes``
+        in their order (:func:`chain_routes`) on the link probabilities of ``tick``."""
+        P = self.link_matrix(nodes, positions, tick)
+        return chain_routes(nodes, P, root) if chain else minimum_spanning_tree_routes(nodes, P, root)
 
     def _count(self, sender: str, receiver: str, k: int) -> None:
         self._counts.setdefault((sender, receiver), [0, 0, 0])[k] += 1

@@ -10,6 +10,7 @@ from autonomy.sensing.channel import (
     Channel,
     ChannelConfig,
     LinkOutage,
+    chain_routes,
     minimum_spanning_tree_routes,
     outage_holds,
     scheduled_links,
@@ -185,3 +186,23 @@ def test_scheduled_links_are_the_topology_less_the_outages_and_the_radio_applies
         P = ch.link_matrix(nodes, pos, tick)
         off = ~np.eye(3, dtype=bool)
         assert ((P[off] > 0) == scheduled_links(nodes, ch.config.links, [("c", "a", 10, 20)], tick)[off]).all()
+
+
+def test_the_fixed_chain_relays_through_the_node_before_whatever_the_links():
+    from autonomy.guidance.infoplan.routing import chain_route_probabilities
+
+    rng = np.random.default_rng(12)
+    channel = Channel(ChannelConfig(block_by_buildings=False), TICK_HZ, rng)
+    nodes = ("base", "a", "b", "c")
+    for _ in range(20):
+        pos = {n: np.r_[rng.uniform(-900, 900, size=2), 50.0] for n in nodes}
+        tree = channel.routing_tree(nodes, pos, "base", 0, chain=True)
+        assert [tree.parent[n] for n in nodes] == [None, "base", "a", "b"]
+        assert tree.path("c") == ("c", "b", "a", "base") and tree.hops("c") == 3
+        P = channel.link_matrix(nodes, pos, 0)
+        np.testing.assert_allclose([tree.route_probability(n) for n in nodes], chain_route_probabilities(P[None])[0],
+                                   rtol=1e-12)
+    mst = channel.routing_tree(nodes, pos, "base", 0)
+    assert mst.parent == minimum_spanning_tree_routes(nodes, P, "base").parent
+    with pytest.raises(ValueError, match="root"):
+        chain_routes(nodes, P, "hub")

@@ -166,6 +166,28 @@ def test_guidance_command_is_the_team_plan_row():
         np.testing.assert_allclose(g.planned_path(), ref.p_W[i])
 
 
+@pytest.mark.parametrize("age_steps", [0.0, 0.5, 1.0, 2.0])
+def test_an_old_teammate_state_is_brought_forward_along_its_shared_plan(age_steps):
+    cfg = InfoPlannerConfig()
+    rates = np.array([[0.3, -0.2, 0.1]])
+    p0, chi0 = np.array([-600.0, -300.0]), 0.7
+    plan, courses = arc_paths(p0, chi0, rates, cfg.speed, cfg.dt)  # what the teammate planned at t = 4
+    mate = TeammateState(id=1, t=4.0, p_W=[*p0, 60.0], v_W=[50 * np.cos(chi0), 50 * np.sin(chi0), 0.0],
+                         plan_p_W=plan[0], plan_dt=cfg.dt)
+    p, chi = InfoPlannerGuidance(cfg, 0)._teammate_now(mate, 4.0 + age_steps * cfg.dt)
+    k = int(age_steps)
+    if age_steps == k:  # at a plan step: its planned position and the course at the end of that arc, exactly
+        np.testing.assert_allclose(p, p0 if k == 0 else plan[0, k - 1], atol=1e-9)
+        assert chi == pytest.approx(chi0 if k == 0 else courses[0, k - 1], abs=1e-9)
+    else:  # halfway along an arc: the chord's midpoint, half the arc's turn
+        np.testing.assert_allclose(p, 0.5 * (p0 + plan[0, 0]), atol=1e-9)
+        assert chi == pytest.approx(chi0 + 0.5 * rates[0, 0] * cfg.dt, abs=1e-9)
+    stale = TeammateState(id=1, t=4.0, p_W=[*p0, 60.0], v_W=[30.0, -40.0, 0.0])  # no plan: straight on
+    p, chi = InfoPlannerGuidance(cfg, 0)._teammate_now(stale, 4.0 + age_steps)
+    np.testing.assert_allclose(p, p0 + age_steps * np.array([30.0, -40.0]), atol=1e-9)
+    assert chi == pytest.approx(np.arctan2(-40.0, 30.0))
+
+
 def test_guidance_flies_in_the_kinematic_loop():
     cfg = InfoPlannerConfig(base_p_W=(0.0, 0.0), speed=15.0, max_heading_rate=0.5, d_safe=30.0)
     laws = [InfoPlannerGuidance(cfg, i) for i in range(2)]

@@ -7,6 +7,7 @@ import pytest
 from simulator.cli import main
 from simulator.reproduce.report import Finding, MeanCI, Table, mean_ci
 
+PHYSICS_WORLDS = {"001": "relay_tracking", "003": "formation_imm"}
 VERDICT = re.compile(r"\| \*\*(reproduced|not reproduced|not comparable)\*\* \|")
 
 
@@ -37,6 +38,8 @@ def test_quick_reproduction_writes_a_report(tmp_path, paper, runs):
         assert (tmp_path / paper / png).stat().st_size > 5000
     index = (tmp_path / "report.md").read_text()
     assert f"[{paper}/report.md]({paper}/report.md)" in index
+    if paper in PHYSICS_WORLDS:  # the cross-check on quadrotors ran its campaigns and judged them
+        assert f"`worlds/{PHYSICS_WORLDS[paper]}.yaml`" in text and "On quadrotors" in text
 
 
 def test_unknown_paper_and_bad_runs_are_input_errors(tmp_path, capsys):

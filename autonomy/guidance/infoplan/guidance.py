@@ -4,6 +4,13 @@ Every UAV runs the same deterministic :class:`~autonomy.guidance.infoplan.planne
 teammates share (ids 0 … N−1), so all UAVs arrive at the same team plan without a central planner (with a lossy or
 delayed state exchange they may differ; the shared plans then keep them close). The UAV flies the first heading rate
 of its own row as a :class:`~autonomy.guidance.setpoints.UnicycleSetpoint` and shares its planned path.
+
+A teammate's state may be older than the planning time ``t`` (over a radio, the last state that got through; a
+teammate that plans later in the same tick has not sent this step's state yet). It is brought to ``t`` along the
+teammate's shared plan (:meth:`TeammateState.predict_xy`): the plan is a chain of the planner's constant-rate arcs, so
+the course at the end of each arc follows from the arc's chord, ``χ_{k+1} = 2 θ_k − χ_k`` (a circular arc turns by
+twice the angle between its chord and its start tangent). Beyond the plan, or without one, the teammate flies straight
+at its last velocity.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from autonomy.guidance.infoplan.config import InfoPlannerConfig
 from autonomy.guidance.infoplan.planner import TeamInfoPlanner, TeamPlan
 from autonomy.guidance.setpoints import UnicycleSetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from autonomy.sensing.measurement import wrap_angle
 
 __all__ = ["InfoPlannerGuidance"]
 
@@ -63,8 +71,7 @@ class InfoPlannerGuidance(Guidance):
         if target is None:
             self.last_plan = None
             return UnicycleSetpoint(speed=cfg.speed, heading_rate=0.0, altitude=cfg.altitude)
-        states = {m.id: (m.p_W[:2], np.arctan2(m.v_W[1], m.v_W[0]) if np.hypot(*m.v_W[:2]) >= self.min_speed
-                         else m.yaw) for m in teammates if m.id != self.uav_id}
+        states = {m.id: self._teammate_now(m, t) for m in teammates if m.id != self.uav_id}
         states[self.uav_id] = (own.p_W[:2], own.course(self.min_speed))
         ids = sorted(states)
         p = np.array([states[i][0] for i in ids])
@@ -80,6 +87,24 @@ class InfoPlannerGuidance(Guidance):
         self._row = ids.index(self.uav_id)
         return UnicycleSetpoint(speed=cfg.speed, heading_rate=float(plan.heading_rates[self._row, 0]),
                                 altitude=cfg.altitude)
+
+    def _teammate_now(self, mate: TeammateState, t: float) -> tuple[np.ndarray, float]:
+        """Horizontal position (m) and course (rad) of ``mate`` at ``t`` (s) (module docstring)."""
+        course = float(np.arctan2(mate.v_W[1], mate.v_W[0])) if np.hypot(*mate.v_W[:2]) >= self.min_speed \
+            else mate.yaw
+        age = t - mate.t
+        if age <= 1e-9:
+            return mate.p_W[:2], course
+        p = mate.predict_xy(np.array([t]))[0]
+        if mate.plan_p_W is None:
+            return p, course
+        pts = np.vstack([mate.p_W[:2], mate.plan_p_W[:, :2]])
+        s = min(age / mate.plan_dt, len(pts) - 1.0)  # arcs flown, the last one perhaps in part
+        for k in range(int(np.ceil(s - 1e-9))):
+            chord = pts[k + 1] - pts[k]
+            turn = 2.0 * wrap_angle(float(np.arctan2(chord[1], chord[0])) - course)  # over the whole arc k
+            course += min(1.0, s - k) * turn  # the heading rate is constant along an arc
+        return p, float(wrap_angle(course))
 
     def planned_path(self) -> np.ndarray | None:
         """(T_p, 2) own planned positions at the planner's steps after the last command (m)."""

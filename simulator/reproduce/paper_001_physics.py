@@ -1,0 +1,299 @@
+"""Paper 001's physics cross-check: campaigns of the world ``relay_tracking`` on PyBullet quadrotors, judged from the
+run records.
+
+Configurations (``--set`` variants of the world, its header): scenario 1 with communication optimisation (A) and
+without (B: β dropped from every UAV's objective, packets still lost); scenario 2 (parked car) over the minimum
+spanning tree and over the fixed relay chain; scenario 3 (three UAVs). Each runs ``min(ctx.runs, PHYSICS_RUNS)``
+seeded runs; A and B, and MST and chain, share their run seeds (same campaign seed), so their differences are paired.
+
+The world is the paper's scaled in length by :data:`SCALE` (errors ×0.2; β, times and angles unchanged), so the
+paper's errors are compared after the same scaling. From each run's record (:func:`simulator.runrecord.load_run`),
+over t ≥ :data:`SETTLE_S` (the tracks start from radar fixes and the base from the first packets): the base's mean
+position error (stream ``base_station`` against ``vehicle_truth``), each UAV's own (``estimates``), and from
+``routing`` each UAV's mean route probability β, the share of packets delivered and the relay pattern of each step.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from simulator.reproduce.report import Finding, ReproContext, Table, mean_ci
+
+__all__ = ["WORLD", "SCALE", "physics_cross_check", "relay_patterns", "pattern_switches", "scenario_overrides"]
+
+WORLD = "relay_tracking"
+SCALE = 0.2
+"""Length scale of the world against the paper (its header)."""
+PHYSICS_RUNS = 10
+"""Runs per configuration of the physics campaigns (at most ``ctx.runs``): a 100 s run costs ≈ 15–25 s of wall time."""
+SETTLE_S = 10.0
+QUICK_DURATION_S = 12.0  # quick mode: one run per configuration, judged over its second half
+THIRD_UAV_ALTITUDE = 16.0  # m: the world's altitudes are 10 and 13 m
+
+
+def _uav(world_raw: dict, like: int, uid: str, position: Sequence[float], yaw_deg: float) -> str:
+    """A ``uavs[k]=…`` value: the world's UAV ``like`` with another id and start (a JSON flow mapping)."""
+    entry = json.loads(json.dumps(world_raw["uavs"][like]))
+    entry["id"] = uid
+    entry["initial"] = {"position": [*position[:2], THIRD_UAV_ALTITUDE], "yaw_deg": yaw_deg}
+    entry["autonomy"]["guidance"]["altitude"] = THIRD_UAV_ALTITUDE
+    return json.dumps(entry, separators=(",", ":"))
+
+
+def scenario_overrides(scenario: str) -> tuple[str, ...]:
+    """The world's ``--set`` overrides of a scenario (1–4; the header of ``worlds/relay_tracking.yaml``)."""
+    from worlds.loader import load_world
+
+    if scenario == "1":
+        return ()
+    if scenario == "2":
+        return ("ground_vehicles[0].route={roads: [park2.f], start_s: 20}",
+                "uavs[0].initial={position: [-160, 40, 10], yaw_deg: 45}",
+                "uavs[1].initial={position: [-80, -140, 13], yaw_deg: 180}")
+    raw = load_world(WORLD).raw
+    if scenario == "3":
+        return ("ground_vehicles[0].route={roads: [road3.f]}", "comms.base_station=[-100, -200, 13]",
+                "uavs[0].initial={position: [-80, -180, 10], yaw_deg: 10}",
+                "uavs[1].initial={position: [-160, 60, 13], yaw_deg: 0}",
+                "uavs[2]=" + _uav(raw, 1, "uav3", (-160, 0), 0.0),
+                *(f"uavs[{i}].autonomy.guidance.infoplan.d_safe=50" for i in range(3)))
+    if scenario == "4":
+        return ("ground_vehicles[0].route={roads: [park4.f], start_s: 20}", "comms.base_station=[0, -40, 13]",
+                "uavs[0].initial={position: [20, -20, 10], yaw_deg: 180}",
+                "uavs[1].initial={position: [-20, 80, 13], yaw_deg: 180}",
+                "uavs[2]=" + _uav(raw, 1, "uav3", (-60, 160), 45.0))
+    raise ValueError(f"no scenario {scenario!r} of the world {WORLD} (1–4)")
+
+
+def _variant_overrides(variant: str, n_uavs: int) -> tuple[str, ...]:
+    if variant == "A":
+        return ()
+    if variant == "B":
+        return tuple(f"uavs[{i}].autonomy.guidance.infoplan.routing=none" for i in range(n_uavs))
+    if variant == "chain":
+        return ("comms.routing=chain",)
+    raise ValueError(f"unknown variant {variant!r}")
+
+
+CONFIGS: tuple[tuple[str, str, int], ...] = (("1", "A", 2), ("1", "B", 2), ("2", "A", 2), ("2", "chain", 2),
+                                             ("3", "A", 3))
+"""(scenario, variant, UAVs): A with communication optimisation over the MST, B without, chain the fixed relay
+chain."""
+
+
+def relay_patterns(parent: np.ndarray) -> list[str]:
+    """Per step, who relays for whom, from the next hops ``parent`` (S, N) (a UAV index, −1 the base, −2 cut off):
+    ``"A2→A1→B"`` … (routes of one hop left out; ``"direct"`` when every route is)."""
+    out = []
+    for row in np.asarray(parent):
+        chains = []
+        for i in range(len(row)):
+            hops, j = [f"A{i + 1}"], i
+            while row[j] >= 0 and len(hops) <= len(row):
+                j = int(row[j])
+                hops.append(f"A{j + 1}")
+            hops.append("B" if row[j] == -1 else "cut")
+            if len(hops) > 2:
+                chains.append("→".join(hops))
+        out.append(", ".join(chains) or "direct")
+    return out
+
+
+def pattern_switches(patterns: list[str], hold: int = 3) -> list[tuple[int, str]]:
+    """(step, relay pattern) at each change of the pattern, ignoring patterns held for fewer than ``hold`` steps."""
+    out: list[tuple[int, str]] = []
+    k = 0
+    while k < len(patterns):
+        j = k
+        while j < len(patterns) and patterns[j] == patterns[k]:
+            j += 1
+        if j - k >= hold and (not out or out[-1][1] != patterns[k]):
+            out.append((k + 1, patterns[k]))
+        k = j
+    return out
+
+
+def _run_numbers(run_dir: Any, n_uavs: int, settle: float) -> dict[str, Any]:
+    """One run's numbers from its record (module docstring)."""
+    from simulator.runrecord import load_run
+
+    rec = load_run(run_dir)
+    vt, b, est, ro = (rec.stream(s) for s in ("vehicle_truth", "base_station", "estimates", "routing"))
+
+    def error(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+        return float(np.mean(np.hypot(x - np.interp(t, vt["t"], vt["x"]), y - np.interp(t, vt["t"], vt["y"]))))
+
+    ok = b["valid"].astype(bool) & (b["t"] >= settle)
+    uav_err = []
+    for k in range(n_uavs):
+        m = (est["uav"] == k) & est["valid"].astype(bool) & (est["t"] >= settle)
+        uav_err.append(error(est["t"][m], est["x"][m], est["y"][m]) if m.any() else np.nan)
+    steps = np.unique(ro["tick"])
+    parent = np.full((steps.size, n_uavs), -2)
+    parent[np.searchsorted(steps, ro["tick"]), ro["uav"]] = ro["parent"]
+    sent = ro["sent"].astype(bool)
+    m = rec.metrics
+    return {"base_error": error(b["t"][ok], b["x"][ok], b["y"][ok]) if ok.any() else np.nan,
+            "base_cover": float(ok.sum() / max((b["t"] >= settle).sum(), 1)),
+            "uav_error": np.array(uav_err),
+            "beta": np.array([ro["beta"][ro["uav"] == k].mean() for k in range(n_uavs)]),
+            "delivered": float(ro["delivered"][sent].mean()) if sent.any() else np.nan,
+            "patterns": relay_patterns(parent),
+            "collisions": sum(u.get("collisions", 0) for u in m.get("uavs", {}).values()),
+            "min_separation": min((u.get("min_separation_m", np.inf) for u in m.get("uavs", {}).values()),
+                                  default=np.nan)}
+
+
+def _campaigns(ctx: ReproContext) -> tuple[dict[tuple[str, str], list[dict]], int, float, float]:
+    """Each configuration's completed runs' numbers; the runs per configuration, the run duration and the time (s)
+    from which runs are judged."""
+    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from worlds.loader import load_world
+
+    runs = 1 if ctx.quick else min(ctx.runs, PHYSICS_RUNS)
+    duration = QUICK_DURATION_S if ctx.quick else float(load_world(WORLD).world.sim.duration_s)
+    settle = QUICK_DURATION_S / 2 if ctx.quick else SETTLE_S
+    out: dict[tuple[str, str], list[dict]] = {}
+    for scenario, variant, n in CONFIGS:
+        cdir = ctx.out_dir / "campaigns" / f"scenario{scenario}_{variant}"
+        res = run_campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
+                                          duration_s=duration if ctx.quick else None,
+                                          overrides=scenario_overrides(scenario) + _variant_overrides(variant, n),
+                                          workers=ctx.workers, progress=ctx.progress))
+        out[(scenario, variant)] = [{"seed": r.seed, **_run_numbers(cdir / r.run_dir, n, settle)}
+                                    for r in sorted(res.reports, key=lambda r: r.index) if r.status == "completed"]
+    return out, runs, duration, settle
+
+
+def _paired(a: list[dict], b: list[dict], key: Any) -> Any:
+    """Mean and 95 % interval of ``key(a_run) − key(b_run)`` over the run seeds both have."""
+    by_seed = {r["seed"]: r for r in b}
+    return mean_ci([key(r) - key(by_seed[r["seed"]]) for r in a if r["seed"] in by_seed])
+
+
+def _verdict(d: Any, sign: int) -> str:
+    """``reproduced`` when the 95 % interval of ``d`` lies on the side ``sign`` of 0; ``not comparable`` without an
+    interval (fewer than two paired runs)."""
+    if d.n < 2 or d.half is None:
+        return "not comparable"
+    return "reproduced" if (d.mean - d.half > 0 if sign > 0 else d.mean + d.half < 0) else "not reproduced"
+
+
+def _beta_alone(a: list[dict], b: list[dict], name: str) -> str:
+    """What the route probabilities alone predict for the base error of ``a`` against ``b``: the base adds the
+    information of the packets that arrive, a share β̄ of them (team mean), so its steady error scales roughly as
+    1/√β̄, and ``a`` should differ from ``b`` by ``err_b (√(β̄_b / β̄_a) − 1)``."""
+    if not a or not b:
+        return ""
+    beta_a, beta_b = (float(np.mean([np.mean(r["beta"]) for r in runs])) for runs in (a, b))
+    err_b = float(np.mean([r["base_error"] for r in b]))
+    return (f". The routes alone predict {err_b * (np.sqrt(beta_b / beta_a) - 1):+.3f} m (team-mean β {beta_a:.2f} "
+            f"against {beta_b:.2f} for {name}; a steady error ∝ 1/√β̄)")
+
+
+def _swaps(patterns: list[str]) -> bool:
+    """Whether both A1 and A2 relay (each for >= 3 consecutive steps) in one run: the relay roles swap."""
+    held = {p for _, p in pattern_switches(patterns)}
+    return any(p.startswith("A2→A1") for p in held) and any(p.startswith("A1→A2") for p in held)
+
+
+def physics_cross_check(ctx: ReproContext) -> tuple[tuple[Table, ...], tuple[Finding, ...], str]:
+    """Run the campaigns and judge them: the tables, the findings and a set-up paragraph."""
+    phys, runs, duration, settle = _campaigns(ctx)
+    s = SCALE
+
+    def col(cfg: tuple[str, str], fn: Any) -> list[float]:
+        return [fn(r) for r in phys[cfg]]
+
+    def cell(paper: float | None, values: list[float], digits: int = 3) -> str:
+        ours = mean_ci(values).text(digits)
+        return ours if paper is None else f"{paper:.3g} / {ours}"
+
+    paper2 = {"A": (1.2778, 3.4806, 1.9570, 0.8858, 0.8056), "B": (1.6287, 2.4619, 1.9565, 0.7359, 0.6203)}
+    rows = []
+    for v, name in (("A", "A: with comm. optimisation"), ("B", "B: without")):
+        cfg, p = ("1", v), paper2[v]
+        rows.append((name, str(len(phys[cfg])), cell(s * p[0], col(cfg, lambda r: r["base_error"])),
+                     *(cell(s * p[1 + k], col(cfg, lambda r, k=k: r["uav_error"][k])) for k in (0, 1)),
+                     *(cell(p[3 + k], col(cfg, lambda r, k=k: r["beta"][k]), 2) for k in (0, 1)),
+                     mean_ci(col(cfg, lambda r: r["delivered"])).text(2),
+                     f"{sum(_swaps(r['patterns']) for r in phys[cfg])} of {len(phys[cfg])}",
+                     str(sum(col(cfg, lambda r: r["collisions"])))))
+    t1 = Table(title=f"Cross-check on PyBullet quadrotors (`{WORLD}`), scenario 1: paper ×{s:g} / ours",
+               columns=("group", "runs", "base error (m)", "A1 error (m)", "A2 error (m)", "A1 β", "A2 β",
+                        "packets delivered", "runs where the relay roles swap", "collisions"),
+               rows=tuple(rows),
+               note=f"Mean ± 95 % CI over the runs (t ≥ {settle:g} s of {duration:g} s runs); the paper's errors are "
+                    f"scaled by the world's length scale {s:g} (its β are not scaled). Errors: mean ‖p̂ − p‖ of the "
+                    "base's fused estimate and of each UAV's own (local EIF) against the car's physics truth. A "
+                    "swap: A2 → A1 → B and A1 → A2 → B each held ≥ 3 steps in one run. The world's deviations are in "
+                    f"its header (`worlds/{WORLD}.yaml`).")
+    s2 = {v: phys[("2", v)] for v in ("A", "chain")}
+    t2 = Table(title=f"Cross-check, scenario 2 (parked car): minimum spanning tree against the fixed chain, "
+                     f"paper ×{s:g} / ours",
+               columns=("routing", "runs", "base error (m)", "A1 β", "A2 β", "packets delivered"),
+               rows=tuple((name, str(len(s2[v])), cell(s * pv, [r["base_error"] for r in s2[v]]),
+                           *(mean_ci([r["beta"][k] for r in s2[v]]).text(2) for k in (0, 1)),
+                           mean_ci([r["delivered"] for r in s2[v]]).text(2))
+                          for v, name, pv in (("A", "minimum spanning tree", 0.4266),
+                                              ("chain", "fixed chain (A2 → A1 → B)", 0.5081))))
+    s3 = phys[("3", "A")]
+    chain3 = [float(np.mean(["A2→A3→A1→B" in p for p in r["patterns"]])) for r in s3]
+    beta3 = mean_ci([r["beta"][1] for r in s3])
+    t3 = Table(title="Cross-check, scenario 3 (three UAVs): relay chain and A2's route probability",
+               columns=("quantity", "paper", "ours"),
+               rows=(("steps with the chain A2 → A3 → A1 → B", "the pattern shown", mean_ci(chain3).text(2)),
+                     ("A2's time-averaged β", "≈ 0.5 (direct link < 0.1)", beta3.text(2)),
+                     ("base error (m)", "–", mean_ci([r["base_error"] for r in s3]).text())))
+
+    findings = []
+    uav_gap = s * (np.mean(paper2["A"][1:3]) - np.mean(paper2["B"][1:3]))
+    beta_gap = np.mean(paper2["A"][3:]) - np.mean(paper2["B"][3:])
+    for claim, key, sign, unit, paper in (
+            ("On quadrotors (physics world), the base station's estimate is better with communication optimisation",
+             "base_error", -1, " m", f"paper ×{s:g}: {s * (1.2778 - 1.6287):.3f} m"),
+            ("On quadrotors, the route probability β is higher with communication optimisation",
+             "beta", +1, "", f"paper: {beta_gap:.2f}"),
+            ("On quadrotors, the UAVs' own estimates are slightly worse with communication optimisation",
+             "uav_error", +1, " m", f"paper ×{s:g}: {uav_gap:.3f} m")):
+        d = _paired(phys[("1", "A")], phys[("1", "B")], lambda r, k=key: float(np.nanmean(r[k])))
+        why = (f"A − B, paired by run seed: {d.text()}{unit} ({paper}; rule: the 95 % interval "
+               f"{'below' if sign < 0 else 'above'} 0)")
+        if key == "base_error":
+            why += _beta_alone(phys[("1", "A")], phys[("1", "B")], "B")
+        findings.append(Finding(claim=claim, verdict=_verdict(d, sign), why=why))
+    swaps = [_swaps(r["patterns"]) for r in phys[("1", "A")]]
+    first = phys[("1", "A")][0]["patterns"] if phys[("1", "A")] else []
+    findings.append(Finding(
+        claim="On quadrotors, scenario 1: one UAV relays for the other and the roles swap",
+        verdict="not comparable" if not swaps else ("reproduced" if np.mean(swaps) >= 0.5 else "not reproduced"),
+        why=f"roles swapped in {sum(swaps)} of {len(swaps)} runs (rule: at least half); patterns held ≥ 3 steps in "
+            "the first run: " + "; ".join(f"from step {k}: {p}" for k, p in pattern_switches(first))))
+    d = _paired(s2["A"], s2["chain"], lambda r: r["base_error"])
+    findings.append(Finding(
+        claim="On quadrotors, scenario 2: the MST topology beats the fixed relay chain at the base",
+        verdict=_verdict(d, -1), why=f"MST − chain base error, paired: {d.text()} m (paper ×{s:g}: "
+                                     f"{s * (0.4266 - 0.5081):.3f} m; rule: the 95 % interval below 0)"
+                                     + _beta_alone(s2["A"], s2["chain"], "the chain")))
+    ok3 = bool(s3) and np.mean(chain3) > 0.3 and 0.3 <= beta3.mean <= 0.7
+    findings.append(Finding(
+        claim="On quadrotors, scenario 3: A2 relays through A3 and A1 (A2 → A3 → A1 → B) with β ≈ 0.5",
+        verdict="not comparable" if not s3 else ("reproduced" if ok3 else "not reproduced"),
+        why=f"share of the steps with the chain: {mean_ci(chain3).text(2)}; A2's mean β {beta3.text(2)} (rule, as the "
+            "kinematic loop's: the chain in more than 30 % of the steps and β in [0.3, 0.7])"))
+    setup = f"""
+Physics cross-check (`worlds/{WORLD}.yaml`, {duration:g} s runs, {runs} per configuration, judged from the run records
+over t ≥ {settle:g} s): PyBullet quadrotors with range-azimuth radars run local information filters (SCIF) and send
+each scan's information to the base station along the radio's routes; the base fuses what arrives; every UAV plans the
+team's headings with the same planner. The world is the paper's scaled in length by {s:g} (10 m/s UAVs at the paper's
+30°/s, a 2 m/s car driven by the physics car model, δr = 0.4 m, Pr(d) = exp(−(d/200 m)³)), so the paper's errors are
+compared ×{s:g}. Scenario 1 with (A) and without (B) the communication term, scenario 2 over the MST and the fixed
+chain (paired by run seed), scenario 3 with three UAVs. Beside each base-error verdict stands what the route
+probabilities alone predict (the base adds a share β̄ of the scans, so its steady error goes roughly as 1/√β̄): an
+effect smaller than the spread of the paired runs cannot pass the rule.
+"""
+    return (t1, t2, t3), tuple(findings), setup

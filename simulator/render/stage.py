@@ -66,12 +66,17 @@ def ground_mask(view: CameraView, width: int, height: int, aspect: float) -> np.
     up and forward axes, ``x_i = 2 (i + 0.5) / W - 1``, ``y_j = 1 - 2 (j + 0.5) / H``); it sees ground where the
     ray's z component is negative.
     """
+    return _ray_z(view, width, height, aspect) < 0.0
+
+
+def _ray_z(view: CameraView, width: int, height: int, aspect: float) -> np.ndarray:
+    """(H, W) z component of each pixel's viewing ray ``f + x_i tan(vfov/2) aspect s + y_j tan(vfov/2) u``."""
     V = view.view_matrix()
     right, up, fwd = V[0, :3], V[1, :3], -V[2, :3]
     ty = np.tan(view.vfov / 2.0)
     x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * ty * aspect
     y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * ty
-    return (fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]) < 0.0
+    return fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]
 
 
 def ground_level_mask(view: CameraView, zbuf: np.ndarray, empty: np.ndarray, aspect: float,
@@ -83,12 +88,7 @@ def ground_level_mask(view: CameraView, zbuf: np.ndarray, empty: np.ndarray, asp
     distance along the optical axis from the depth buffer value ``z``: ``d = far near / (far − (far − near) z)``.
     """
     height, width = zbuf.shape
-    V = view.view_matrix()
-    right, up, fwd = V[0, :3], V[1, :3], -V[2, :3]
-    ty = np.tan(view.vfov / 2.0)
-    x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * ty * aspect
-    y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * ty
-    ray_z = fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]
+    ray_z = _ray_z(view, width, height, aspect)
     n, f = view.near, view.far
     d = f * n / (f - (f - n) * np.minimum(zbuf, _EMPTY_DEPTH))
     return np.where(empty, ray_z < 0.0, view.eye_W[2] + d * ray_z < max_z)

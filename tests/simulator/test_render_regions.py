@@ -140,3 +140,20 @@ def test_replay_of_a_search_draws_the_sets_on_the_ground_only(tmp_path):
         assert all("X-bar" in line for line in lines[1:5]) and lines[5] == "sets drawn: uav1's"
     finally:
         rep.close()
+
+
+def test_a_snapshot_writes_shared_sets_once():
+    """UAVs whose sets are those of a UAV before them in the line (after fusing) are written ``same_as`` it."""
+    from types import SimpleNamespace
+
+    from simulator.search_team import _snapshot
+
+    def slot(uav, X, Xbar):
+        sets = SimpleNamespace(X=shapely.from_wkt(X), Xbar=shapely.from_wkt(Xbar))
+        return SimpleNamespace(uav=uav, agent=SimpleNamespace(estimator=SimpleNamespace(
+            estimator=SimpleNamespace(estimate=sets))))
+
+    a, b = "POLYGON ((0 0, 1 0, 1 1, 0 0))", "POLYGON ((0 0, 5 0, 5 5, 0 0))"
+    line = _snapshot([slot(0, a, b), slot(1, b, a), slot(2, a, b), slot(3, b, a), slot(4, a, a)])
+    assert [u.get("same_as") for u in line] == [None, None, 0, 1, None]
+    assert line[4] == {"uav": 4, "X": a, "Xbar": a}

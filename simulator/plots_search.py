@@ -2,39 +2,23 @@
 
 Left: each UAV's normalised areas ``φ(X)/φ(X_s)`` and ``φ(X̄)/φ(X_s)`` over time and the team's mean (the paper's
 Fig. 6), with the steps at which a true target lay outside some UAV's ``X ∪ X̄`` marked (there should be none).
-Right: the last snapshot of UAV 0's sets (``search_sets.jsonl``) on the map with the buildings, the UAVs' tracks, the
+Right: the last snapshot of UAV 0's sets (``search_sets.jsonl.gz``) on the map with the buildings, the UAVs' tracks, the
 cars' paths and the decoys.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from simulator.runrecord import RunRecord
+from simulator.runrecord import RunRecord, load_search_sets
 
 __all__ = ["search_plot"]
 
 _X_RGBA = (0.85, 0.1, 0.1, 0.55)
 _XBAR_RGBA = (0.2, 0.45, 0.9, 0.25)
-
-
-def _last_snapshot(run_dir: Path) -> dict[str, Any] | None:
-    path = run_dir / "search_sets.jsonl"
-    if not path.exists():
-        return None
-    last = None
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            if line.strip():
-                try:
-                    last = json.loads(line)
-                except json.JSONDecodeError:  # a run killed while writing its last line
-                    break
-    return last
 
 
 def _draw_set(ax: Any, wkt: str, rgba: tuple[float, ...], label: str) -> None:
@@ -90,13 +74,15 @@ def search_plot(plt: Any, rec: RunRecord, world: Any, plots: Path) -> Path | Non
         blds = [xy[off[i]:off[i + 1]] for i in range(len(off) - 1)]
         if blds:
             mp.add_collection(PolyCollection(blds, facecolor="0.6", edgecolor="0.3", lw=0.5, zorder=3))
-    snap = _last_snapshot(plots.parent)
+    snaps = load_search_sets(plots.parent)
     title = "map"
-    if snap is not None and snap["uavs"]:
-        first = snap["uavs"][0]
-        _draw_set(mp, first["Xbar"], _XBAR_RGBA, "X̄ (undetected targets)")
-        _draw_set(mp, first["X"], _X_RGBA, "X (detected targets)")
-        title = f"sets of UAV {first['uav']} at t = {snap['t']:.0f} s"
+    if snaps and snaps[-1].sets:
+        snap = snaps[-1]
+        first = min(snap.sets)
+        X, Xbar = snap.sets[first]
+        _draw_set(mp, Xbar, _XBAR_RGBA, "X̄ (undetected targets)")
+        _draw_set(mp, X, _X_RGBA, "X (detected targets)")
+        title = f"sets of UAV {first} at t = {snap.t:.0f} s"
     if "uav_truth" in rec.streams:
         ut = rec.streams["uav_truth"]
         for u in np.unique(ut["uav"]):

@@ -17,6 +17,7 @@ Streams are "long" tables: one row per entity per sample, with ``tick`` and ``t`
 
 from __future__ import annotations
 
+import gzip
 import json
 import os
 import time
@@ -122,12 +123,17 @@ class RunRecorder:
         return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n", sync)
 
     def append_line(self, name: str, data: Any) -> None:
-        """Append ``data`` as one JSON line to the file ``name`` (written at once; replaced with a new record)."""
+        """Append ``data`` as one JSON line to the file ``name`` (written at once; replaced with a new record). A name
+        ending in ``.gz`` gets each line as a gzip member of its own (``gzip.open`` reads them as one text; a run killed
+        mid-write loses its last line only)."""
         path = self.out_dir / name
-        mode = "a" if name in self._lines else "w"
+        mode = "ab" if name in self._lines else "wb"
         self._lines.add(name)
-        with open(path, mode, encoding="utf-8") as f:
-            f.write(json.dumps(data, default=json_default) + "\n")
+        line = (json.dumps(data, default=json_default) + "\n").encode("utf-8")
+        if name.endswith(".gz"):
+            line = gzip.compress(line, compresslevel=6, mtime=0)
+        with open(path, mode) as f:
+            f.write(line)
 
     # -- events ----------------------------------------------------------------------------------------------------
     def event(self, type: str, tick: int | None = None, t: float | None = None, /, **fields: Any) -> None:

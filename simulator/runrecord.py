@@ -1,8 +1,9 @@
 """Reading a run directory back (complete or partial): time series as numpy arrays (or pandas frames), events,
-metrics."""
+metrics, and the set-membership search's set snapshots."""
 
 from __future__ import annotations
 
+import gzip
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RunRecord", "load_run", "load_stream"]
+__all__ = ["RunRecord", "SetSnapshot", "load_run", "load_search_sets", "load_stream"]
 
 
 def load_stream(folder: Path) -> dict[str, np.ndarray]:
@@ -91,3 +92,40 @@ def load_run(path: str | Path) -> RunRecord:
             if data:
                 streams[folder.name] = data
     return RunRecord(path=path, run=run, metrics=metrics, events=events, streams=streams)
+
+
+@dataclass(frozen=True)
+class SetSnapshot:
+    """The search team's sets at one step (a line of ``search_sets.jsonl.gz``): ``sets[uav] = (X, X̄)`` as WKT."""
+
+    tick: int
+    t: float
+    sets: dict[int, tuple[str, str]]
+
+
+def load_search_sets(path: str | Path) -> list[SetSnapshot]:
+    """The set snapshots of the run directory ``path`` in time order (``[]`` when it has none):
+    ``search_sets.jsonl.gz``, or the plain ``search_sets.jsonl`` of older runs.
+
+    A UAV written ``same_as`` another gets that UAV's sets; a truncated last line (a killed run) ends the list.
+    """
+    path = Path(path)
+    gz, plain = path / "search_sets.jsonl.gz", path / "search_sets.jsonl"
+    if not (gz.exists() or plain.exists()):
+        return []
+    out = []
+    with (gzip.open(gz, "rt", encoding="utf-8") if gz.exists() else open(plain, encoding="utf-8")) as f:
+        try:
+            for line in f:
+                if line.strip():
+                    out.append(_snapshot(json.loads(line)))
+        except (EOFError, gzip.BadGzipFile, json.JSONDecodeError, KeyError):  # a run killed while writing a line
+            pass
+    return out
+
+
+def _snapshot(rec: dict[str, Any]) -> SetSnapshot:
+    sets: dict[int, tuple[str, str]] = {}
+    for u in rec["uavs"]:
+        sets[int(u["uav"])] = sets[int(u["same_as"])] if "same_as" in u else (u["X"], u["Xbar"])
+    return SetSnapshot(tick=int(rec["tick"]), t=float(rec["t"]), sets=sets)

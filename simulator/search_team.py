@@ -17,8 +17,9 @@ team when their agents are due (they share one rate, :mod:`worlds.checks`):
    whether the decision was safe (:class:`~autonomy.guidance.search.planner.SearchDecision`), the heading change
    ``u`` and the model's next position (``plan_x``, ``plan_y``: the chord's end), and ``deviation``, how far the UAV
    ended this step from where its last decision's chord put it (the physical UAV against the planner's model); every
-   :data:`SNAPSHOT_EVERY` steps, each UAV's sets as one line of ``search_sets.jsonl`` (rounded to 0.1 m: for plots,
-   not for the guarantee).
+   :data:`SNAPSHOT_EVERY` steps, each UAV's sets as one line of :data:`SETS_FILE`, rounded to 0.1 m (for plots
+   and videos, not for the guarantee; read back by :func:`simulator.runrecord.load_search_sets`). A UAV whose sets
+   are those of a UAV before it in the line, as after fusing with it, is written ``{"uav": k, "same_as": j}``.
 
 :meth:`SearchTeamRun.summary` gives the run's figures for ``metrics.json``: the guarantee rate and its violations,
 the team-mean areas at the end, the first step at which the team-mean ``φ(X̄)/φ(X_s)`` fell below
@@ -40,12 +41,14 @@ from autonomy.fusion.set_team import fuse_team_sets
 from autonomy.guidance.search.planner import decision_order
 from autonomy.guidance.types import TeammateState
 
-__all__ = ["EMPTY_FRACTION", "SearchTeamRun"]
+__all__ = ["EMPTY_FRACTION", "SETS_FILE", "SNAPSHOT_EVERY", "SearchTeamRun"]
 
 EMPTY_FRACTION = 0.01
 """``φ(X̄)/φ(X_s)`` below which the team's undetected set counts as empty (the reproduction's threshold)."""
-SNAPSHOT_EVERY = 25
-"""Team steps between snapshots of every UAV's sets in ``search_sets.jsonl`` (for plots; WKT at 0.1 m)."""
+SETS_FILE = "search_sets.jsonl.gz"
+"""The set snapshots' file in the run directory: JSON lines, each a gzip member (≈ 5× smaller than the text)."""
+SNAPSHOT_EVERY = 1
+"""Team steps between snapshots of every UAV's sets in :data:`SETS_FILE` (for plots and videos; WKT at 0.1 m)."""
 
 
 @dataclass
@@ -155,10 +158,7 @@ class SearchTeamRun:
                                 vertices_X=_vertices(sets.X), vertices_Xbar=_vertices(sets.Xbar))
         self.steps += 1
         if self.steps % SNAPSHOT_EVERY == 0:
-            asm.recorder.append_line("search_sets.jsonl", {
-                "tick": tick, "t": t, "uavs": [{"uav": a.uav, "X": _wkt(a.agent.estimator.estimator.estimate.X),
-                                                "Xbar": _wkt(a.agent.estimator.estimator.estimate.Xbar)}
-                                               for a in slots]})
+            asm.recorder.append_line(SETS_FILE, {"tick": tick, "t": t, "uavs": _snapshot(slots)})
         self.decoy_steps += decoy_seen
         mean = np.mean(areas, axis=0)
         self.last_areas = (float(mean[0]), float(mean[1]))
@@ -183,6 +183,21 @@ def _percentile(values: list[float], q: float) -> float | None:
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]
     return float(np.percentile(v, q)) if v.size else None
+
+
+def _snapshot(slots: Sequence[Any]) -> list[dict[str, Any]]:
+    """A line's ``uavs`` entries: each UAV's sets as WKT, or ``same_as`` the first UAV before it with the same text."""
+    out: list[dict[str, Any]] = []
+    seen: dict[tuple[str, str], int] = {}
+    for a in slots:
+        sets = a.agent.estimator.estimator.estimate
+        key = (_wkt(sets.X), _wkt(sets.Xbar))
+        if key in seen:
+            out.append({"uav": a.uav, "same_as": seen[key]})
+        else:
+            seen[key] = a.uav
+            out.append({"uav": a.uav, "X": key[0], "Xbar": key[1]})
+    return out
 
 
 def _wkt(geom: Any) -> str:

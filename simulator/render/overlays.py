@@ -4,6 +4,10 @@ Every world-space mark (the true and estimated target positions, the estimate's 
 circle, UAV trails, radar detections) is projected with the frame's own :class:`CameraView`, so it lands where the
 3D renderer drew the scene. Lines are drawn with 4 fractional bits (``shift=4``) for sub-pixel placement.
 
+Ground regions (the search's sets) are filled translucently: each is cut to the part of the ground plane in front of
+the camera (:func:`_in_front`), projected (a plane seen through a pinhole maps straight edges to straight edges
+there), cut to the image in pixels and filled, holes included.
+
 The 2σ ellipse of a position covariance ``P = V diag(l1, l2) V^T`` is
 ``x + 2 V diag(sqrt(l1), sqrt(l2)) [cos a, sin a]``; for a Gaussian it holds 1 - exp(-2) ≈ 86 % of the
 probability mass in 2D.
@@ -13,15 +17,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
+import shapely
 
 from simulator.render.projection import CameraView
 from simulator.render.timeline import RadarScan
 from simulator.render.world_marks import probability_rgb
 
-__all__ = ["LEGEND", "EstimateMark", "OverlayFrame", "covariance_ellipse", "draw_hud", "draw_overlays", "rgb255"]
+__all__ = ["LEGEND", "SEARCH_LEGEND", "EstimateMark", "GroundRegion", "OverlayFrame", "covariance_ellipse", "draw_hud",
+           "draw_overlays", "rgb255"]
 
 _SHIFT = 4
 _ONE = 1 << _SHIFT
@@ -29,6 +36,8 @@ _LIMIT = 1e5  # px: keeps far off-screen points inside cv2's fixed-point range
 _TRUTH_RGB = (255, 255, 255)
 _CLUTTER_RGB = (255, 230, 0)
 _CIRCLE_POINTS = 72
+_FRONT_MARGIN = 1.0  # m beyond the near plane: regions are cut there before they are projected
+_IMAGE_MARGIN = 16  # px around the image kept when a projected region is cut to it
 
 
 def rgb255(rgb: Sequence[float]) -> tuple[int, int, int]:
@@ -56,6 +65,16 @@ class EstimateMark:
 
 
 @dataclass(frozen=True)
+class GroundRegion:
+    """A region of the ground to fill: its colour (RGB in [0, 1]), opacity in [0, 1] and shape (a shapely polygon or
+    multipolygon in world x, y, m)."""
+
+    rgb: tuple[float, float, float]
+    alpha: float
+    geom: Any
+
+
+@dataclass(frozen=True)
 class OverlayFrame:
     """The world-space marks of one frame.
 
@@ -63,7 +82,8 @@ class OverlayFrame:
     each UAV's detections; ``uavs`` (colour, name, p_W (3,) m) ringed and labelled; ``ground_z`` the height (m) at
     which the 2D estimates, ellipses and standoff circles are drawn; ``regards`` (colour, closed ground outline
     (K, 3) m) the radars' fields of regard; ``links`` (p_a, p_b, delivery probability) the radio links;
-    ``constrained_roads`` (colour, centre-line (K, 3) m) the road each road-constrained estimator holds the target on.
+    ``constrained_roads`` (colour, centre-line (K, 3) m) the road each road-constrained estimator holds the target on;
+    ``regions`` ground regions filled at ``ground_z`` under every other mark, in order.
     """
 
     target_W: np.ndarray | None
@@ -76,6 +96,7 @@ class OverlayFrame:
     regards: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
     constrained_roads: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
     links: list[tuple[np.ndarray, np.ndarray, float]] = field(default_factory=list)
+    regions: list[GroundRegion] = field(default_factory=list)
 
 
 def _pixels(view: CameraView, pts_W: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
@@ -113,10 +134,78 @@ def _circle_W(centre: np.ndarray, radius: float) -> np.ndarray:
     return centre + radius * np.c_[np.cos(a), np.sin(a)]
 
 
-def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame) -> None:
-    """Draw ``frame``'s marks on ``img`` (H, W, 3) RGB uint8 in place, as seen through ``view``."""
+def _in_front(view: CameraView, z: float, depth: float) -> Any:
+    """The part of the ground plane at height ``z`` m at least ``depth`` m in front of the camera along its optical
+    axis, as a polygon reaching past the far plane; ``None`` when the whole plane is in front.
+
+    A ground point p = (x, y, z) is in front when (p − eye)·f ≥ depth, f the unit optical axis: the half-plane
+    f_xy·(x, y) ≥ depth + eye·f − f_z z.
+    """
+    f = view.target_W - view.eye_W
+    f = f / np.linalg.norm(f)
+    c = depth + float(view.eye_W @ f) - f[2] * z
+    n = float(np.hypot(f[0], f[1]))
+    if n < 1e-9:  # looking straight up or down: all of the plane or none of it
+        return None if c <= 0.0 else shapely.Polygon()
+    u = f[:2] / n
+    base, side = u * (c / n), np.array([-u[1], u[0]])
+    reach = 2.0 * (view.far + float(np.hypot(*view.eye_W[:2])) + abs(c / n))
+    return shapely.Polygon([base + reach * side, base - reach * side, base - reach * side + reach * u,
+                            base + reach * side + reach * u])
+
+
+def _region_pixels(view: CameraView, geom: Any, z: float, w: int, h: int) -> list[np.ndarray]:
+    """The rings, in fixed-point pixels (K, 1, 2) int32, of the ground region ``geom`` at height ``z`` m cut to the
+    part in front of the camera and to the image (with a margin)."""
+    front = _in_front(view, z, view.near + _FRONT_MARGIN)
+    if front is not None:
+        geom = shapely.intersection(geom, front)
+    image = shapely.box(-_IMAGE_MARGIN, -_IMAGE_MARGIN, w + _IMAGE_MARGIN, h + _IMAGE_MARGIN)
+    rings = []
+    for poly in shapely.get_parts(geom):
+        if poly.geom_type != "Polygon" or poly.is_empty:
+            continue
+        px = []
+        for ring in (poly.exterior, *poly.interiors):
+            uv, ok = view.project(_at_ground(np.asarray(ring.coords)[:, :2], z), w, h)
+            if not ok.all():
+                break
+            px.append(uv)
+        else:
+            cut = shapely.intersection(shapely.make_valid(shapely.Polygon(px[0], px[1:])), image)
+            for part in shapely.get_parts(cut):
+                if part.geom_type == "Polygon" and not part.is_empty:
+                    for ring in (part.exterior, *part.interiors):
+                        rings.append(np.round(np.asarray(ring.coords) * _ONE).astype(np.int32).reshape(-1, 1, 2))
+    return rings
+
+
+def _fill_region(img: np.ndarray, view: CameraView, region: GroundRegion, z: float,
+                 ground_visible: np.ndarray | None) -> None:
+    """Fill ``region`` translucently and outline it, on the pixels of ``ground_visible`` only (all when ``None``)."""
+    h, w = img.shape[:2]
+    rings = _region_pixels(view, region.geom, z, w, h)
+    if not rings:
+        return
+    col = rgb255(region.rgb)
+    mask = np.zeros((h, w), np.uint8)
+    cv2.fillPoly(mask, rings, 255, cv2.LINE_8, _SHIFT)  # even-odd over all rings: holes stay open
+    if ground_visible is not None:
+        mask &= ground_visible.view(np.uint8) * np.uint8(255)
+    a = float(region.alpha)
+    layer = cv2.add(cv2.multiply(img, (1.0 - a,) * 3 + (0.0,)), tuple(a * c for c in col) + (0.0,))
+    cv2.polylines(layer, rings, True, col, 1, cv2.LINE_AA, _SHIFT)
+    cv2.copyTo(layer, mask, img)
+
+
+def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame,
+                  ground_visible: np.ndarray | None = None) -> None:
+    """Draw ``frame``'s marks on ``img`` (H, W, 3) RGB uint8 in place, as seen through ``view``; ground regions only
+    on the pixels of ``ground_visible`` (H, W) bool, where the ground or a road is seen (all pixels when ``None``)."""
     h, w = img.shape[:2]
     s = max(1, int(round(h / 360)))  # line scale for the image size
+    for region in frame.regions:
+        _fill_region(img, view, region, frame.ground_z, ground_visible)
     for rgb, pts in frame.regards:
         _polyline(img, view, pts, rgb255(tuple(0.55 * c + 0.45 for c in rgb)), 1, closed=True)
     for rgb, pts in frame.constrained_roads:
@@ -181,6 +270,10 @@ LEGEND = (("white brackets: true target   x: estimate   ellipse around it: 2-sig
           ("pale outline: radar field of regard   UAV-to-UAV line: radio link, red (Pr 0) to green (Pr 1)   "
            "thick road line: road the filter is constrained to",
            (0.9, 0.9, 0.9)))
+
+
+SEARCH_LEGEND = (("blue fill: X-bar, where an undetected target may be   red fill: X, where a detected target may be "
+                  "(sets of the UAV named in the HUD)", (0.9, 0.9, 0.9)),)
 
 
 def draw_hud(img: np.ndarray, lines: Sequence[tuple[str, tuple[float, float, float]]], corner: str = "left",

@@ -23,12 +23,13 @@ from tqdm import tqdm
 from simulator.render.cameras import CameraInputs, CameraRig, ChaseCamera, OnboardCamera, OrbitCamera, TopDownCamera
 from simulator.render.config import RenderConfig
 from simulator.render.encode import VideoEncoder
-from simulator.render.overlays import LEGEND, EstimateMark, OverlayFrame, draw_hud, draw_overlays
+from simulator.render.overlays import (LEGEND, SEARCH_LEGEND, EstimateMark, GroundRegion, OverlayFrame, draw_hud,
+                                       draw_overlays)
 from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
 from simulator.render.timeline import Timeline
 from simulator.render.world_marks import RadioLinks, radar_regards
-from simulator.runrecord import load_run
+from simulator.runrecord import load_run, load_search_sets
 from simulator.stdio import quiet_c_stdout
 
 __all__ = ["Panel", "RenderedFrame", "Replayer", "render_run"]
@@ -39,6 +40,8 @@ _STANDOFF_GUIDANCE = ("vector_field", "nmpc", "plugin")
 _DEFAULT_CAR = (4.77, 1.83, 1.47)  # m, the sedan's body (vehicles/cars/sedan.py)
 _DEFAULT_ARM = 0.25  # m, a 500 mm-class quadrotor (vehicles/airframes/survey_quad.py)
 _TOPDOWN_MARGIN = 0.08  # fraction of the framed area added on each side
+_X_RGB, _X_ALPHA = (0.85, 0.1, 0.1), 0.45  # the search's sets, as in plots/search.png
+_XBAR_RGB, _XBAR_ALPHA = (0.2, 0.45, 0.9), 0.3
 
 
 @dataclass(frozen=True)
@@ -143,6 +146,7 @@ class Replayer:
         self.regards = radar_regards(world)
         self._road_index = {rid: k for k, rid in enumerate(self.geometry.road_ids) if rid}
         self.links = self._radio_links()
+        self.search_sets = _SearchSets(self.run_dir, cfg.uav, rec.streams.get("search"))
 
     def _radio_links(self) -> RadioLinks | None:
         """The run's radio model on the stage's buildings, or None (perfect radio, or a world that does not load)."""
@@ -264,7 +268,8 @@ class Replayer:
                             uavs=[(UAV_COLORS[u % len(UAV_COLORS)], self.uav_names[u], tl.uavs[u].at(t)[0])
                                   for u in self.uav_index],
                             ground_z=float(p_t[2]), regards=self._regard_marks(t, float(p_t[2])),
-                            links=self._link_marks(t), constrained_roads=self._road_marks(t, float(p_t[2])))
+                            links=self._link_marks(t), constrained_roads=self._road_marks(t, float(p_t[2])),
+                            regions=self.search_sets.regions(t))
 
     def _road_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
         marks = []
@@ -298,7 +303,8 @@ class Replayer:
         for u in self.uav_index:
             name = self.uav_names[u]
             got = tl.estimates[u].at(t) if u in tl.estimates else None
-            text = f"{name}: no estimate"
+            areas = self.search_sets.areas(u, t)
+            text = f"{name}: no estimate" if areas is None else f"{name}: {areas}"
             if got is not None and self.target is None:
                 text = f"{name}: estimate at ({got[0][0]:.0f}, {got[0][1]:.0f}) m"
             elif got is not None:
@@ -309,6 +315,8 @@ class Replayer:
             if solve is not None:
                 text += f"  solve {float(solve):.1f} ms"
             lines.append((text, UAV_COLORS[u % len(UAV_COLORS)]))
+        if self.search_sets and self.search_sets.regions(t):
+            lines.append((f"sets drawn: {self.uav_names[self.config.uav]}'s", (0.9, 0.9, 0.9)))
         return lines
 
     def render_frames(self, segmentation: bool = False, start: int = 0,
@@ -338,25 +346,73 @@ class Replayer:
         panels = []
         for (name, x0, pw), view in zip(self.layout, views, strict=True):
             rw, rh = self._render_size(pw)
-            rgb, seg = self.stage.render(view, rw, rh, segmentation=segmentation, aspect=pw / cfg.height)
+            rgb, seg = self.stage.render(view, rw, rh, segmentation=segmentation, aspect=pw / cfg.height,
+                                         ground_level=marks is not None and bool(marks.regions))
+            ground = self.stage.ground_visible
             if (rw, rh) != (pw, cfg.height):
                 rgb = cv2.resize(rgb, (pw, cfg.height), interpolation=cv2.INTER_LINEAR)
                 if seg is not None:
                     seg = cv2.resize(seg.astype(np.int32), (pw, cfg.height), interpolation=cv2.INTER_NEAREST)
+                if ground is not None:
+                    ground = cv2.resize(ground.astype(np.uint8), (pw, cfg.height),
+                                        interpolation=cv2.INTER_NEAREST).astype(bool)
             if marks is not None:
-                draw_overlays(rgb, view, marks)
+                draw_overlays(rgb, view, marks, ground_visible=ground)
             out[:, x0:x0 + pw] = rgb
             panels.append(Panel(name, view, x0, pw, cfg.height, seg))
         if cfg.overlays:
             draw_hud(out, self.hud_lines(t))
             if cfg.legend:
-                draw_hud(out, LEGEND, corner="bottom", size=0.7)
+                draw_hud(out, LEGEND + (SEARCH_LEGEND if self.search_sets else ()), corner="bottom", size=0.7)
             for pnl in panels[1:]:
                 cv2.line(out, (pnl.x0, 0), (pnl.x0, cfg.height - 1), (20, 20, 20), 2)
         return RenderedFrame(t=t, rgb=out, panels=panels)
 
     def close(self) -> None:
         self.stage.close()
+
+
+class _SearchSets:
+    """The sets of one UAV of a set-membership search (``search_sets.jsonl.gz``) over time: the last snapshot at or
+    before a frame's time, parsed once; every UAV's set areas from the ``search`` stream for the HUD. Empty for other
+    runs."""
+
+    def __init__(self, run_dir: Path, uav: int, stream: dict[str, np.ndarray] | None) -> None:
+        snaps = [s for s in load_search_sets(run_dir) if uav in s.sets]
+        self._t = np.array([s.t for s in snaps])
+        self._wkt = [s.sets[uav] for s in snaps]
+        self._parsed: tuple[int, tuple[Any, Any]] | None = None
+        self._areas: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        if stream is not None:
+            for u in np.unique(stream.get("uav", [])).tolist():
+                m = stream["uav"] == u
+                self._areas[int(u)] = (stream["t"][m], stream["area_X"][m], stream["area_Xbar"][m])
+
+    def __bool__(self) -> bool:
+        return len(self._wkt) > 0
+
+    def regions(self, t: float) -> list[GroundRegion]:
+        """X̄ then X at time ``t`` s (none before the first snapshot)."""
+        k = int(np.searchsorted(self._t, t + 1e-9, side="right")) - 1
+        if k < 0:
+            return []
+        if self._parsed is None or self._parsed[0] != k:
+            import shapely
+
+            # rounded to 0.1 m, a set can touch itself: made valid once for the cuts of every frame
+            X, Xbar = (shapely.make_valid(shapely.from_wkt(w)) for w in self._wkt[k])
+            self._parsed = (k, (X, Xbar))
+        X, Xbar = self._parsed[1]
+        return [GroundRegion(_XBAR_RGB, _XBAR_ALPHA, Xbar), GroundRegion(_X_RGB, _X_ALPHA, X)]
+
+    def areas(self, uav: int, t: float) -> str | None:
+        """UAV ``uav``'s set areas at its last step at or before ``t`` s, as HUD text (None: not a searcher, or
+        before its first step)."""
+        if uav not in self._areas:
+            return None
+        ts, aX, aXb = self._areas[uav]
+        j = int(np.searchsorted(ts, t + 1e-9, side="right")) - 1
+        return None if j < 0 else f"X-bar {aXb[j]:.1%}  X {aX[j]:.2%} of the search area"
 
 
 def render_run(run_dir: Path, config: RenderConfig) -> Path:

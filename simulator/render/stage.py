@@ -31,12 +31,14 @@ from simulator.scene import BUILDING_RGBA, GROUND_RGBA, ROAD_RGBA, Scene, SceneC
 from simulator.scene_query import try_load_egl
 from worlds.geometry import Building
 
-__all__ = ["SKY_RGB", "UAV_COLORS", "Stage", "StaticGeometry", "ground_mask", "load_geometry", "ribbon_mesh"]
+__all__ = ["SKY_RGB", "UAV_COLORS", "Stage", "StaticGeometry", "ground_level_mask", "ground_mask", "load_geometry",
+           "ribbon_mesh"]
 
 SKY_RGB = (0.72, 0.82, 0.93)
 _EMPTY_DEPTH = 1.0 - 1e-7  # depth-buffer value of pixels nothing was drawn on
 _CHUNK = 256  # buildings per visual mesh
 _ROAD_Z = 0.03  # m, road strips just above the ground
+_GROUND_LEVEL_Z = 0.25  # m: a drawn surface below this height is ground level (roads), for overlays of ground regions
 _LIGHT_DIR = (-0.45, -0.75, 1.0)  # towards the light (sun in the south-south-west, high): walls and roofs differ
 
 # RGB in [0, 1] per UAV index (matplotlib's tab10, as in the run's plots)
@@ -64,12 +66,32 @@ def ground_mask(view: CameraView, width: int, height: int, aspect: float) -> np.
     up and forward axes, ``x_i = 2 (i + 0.5) / W - 1``, ``y_j = 1 - 2 (j + 0.5) / H``); it sees ground where the
     ray's z component is negative.
     """
+    return _ray_z(view, width, height, aspect) < 0.0
+
+
+def _ray_z(view: CameraView, width: int, height: int, aspect: float) -> np.ndarray:
+    """(H, W) z component of each pixel's viewing ray ``f + x_i tan(vfov/2) aspect s + y_j tan(vfov/2) u``."""
     V = view.view_matrix()
     right, up, fwd = V[0, :3], V[1, :3], -V[2, :3]
     ty = np.tan(view.vfov / 2.0)
     x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * ty * aspect
     y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * ty
-    return (fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]) < 0.0
+    return fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]
+
+
+def ground_level_mask(view: CameraView, zbuf: np.ndarray, empty: np.ndarray, aspect: float,
+                      max_z: float) -> np.ndarray:
+    """(H, W) bool: pixels that show the ground, nothing in front of it: painted ground (``empty`` pixels whose ray
+    goes down, :func:`ground_mask`) or a drawn surface below ``max_z`` m (roads).
+
+    A drawn pixel's surface lies at ``eye + d (f + x_i s + y_j u)`` (the ray of :func:`ground_mask`), ``d`` its
+    distance along the optical axis from the depth buffer value ``z``: ``d = far near / (far − (far − near) z)``.
+    """
+    height, width = zbuf.shape
+    ray_z = _ray_z(view, width, height, aspect)
+    n, f = view.near, view.far
+    d = f * n / (f - (f - n) * np.minimum(zbuf, _EMPTY_DEPTH))
+    return np.where(empty, ray_z < 0.0, view.eye_W[2] + d * ray_z < max_z)
 
 
 class StaticGeometry:
@@ -173,6 +195,8 @@ class Stage:
         self._ground_rgb = np.array([round(255 * v) for v in GROUND_RGBA[:3]], dtype=np.uint8)
         self._sky_rgb = np.array([round(255 * v) for v in SKY_RGB], dtype=np.uint8)
         self.egl = bool(use_egl) and try_load_egl(c)
+        self.ground_visible: np.ndarray | None = None
+        """(H, W) bool of the last :meth:`render` with ``ground_level``: pixels showing the ground or a road."""
         self._tmp = tempfile.TemporaryDirectory(prefix="skytrack-render-") if self.egl else None
         road = ribbon_mesh(geometry.roads, road_half_width, _ROAD_Z)
         for k in range(0, len(geometry.buildings), _CHUNK):
@@ -230,11 +254,12 @@ class Stage:
                                               physicsClientId=self.client)
 
     def render(self, view: CameraView, width: int, height: int, segmentation: bool = False,
-               aspect: float | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+               aspect: float | None = None, ground_level: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
         """RGB image (H, W, 3) uint8 and, if asked, the segmentation mask (H, W) of body ids (-1: background).
 
         ``aspect`` overrides ``width / height`` in the projection (an image rendered small and scaled up to a size
-        of slightly different aspect).
+        of slightly different aspect). With ``ground_level``, :attr:`ground_visible` is set to the (H, W) mask of the
+        pixels that show the ground or a road (:func:`ground_level_mask`), else to ``None``.
         """
         proj = perspective(view.vfov, aspect or width / height, view.near, view.far)
         flags = 0 if segmentation else p.ER_NO_SEGMENTATION_MASK
@@ -244,9 +269,12 @@ class Stage:
             projectionMatrix=to_gl(proj), renderer=renderer, flags=flags, shadow=0, lightDirection=_LIGHT_DIR,
             physicsClientId=self.client)
         rgb = np.ascontiguousarray(np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3])
-        empty = (np.asarray(zbuf).reshape(height, width) >= _EMPTY_DEPTH)[:, :, None]
+        depth = np.asarray(zbuf).reshape(height, width)
+        empty = depth >= _EMPTY_DEPTH
         ground = ground_mask(view, width, height, aspect or width / height)[:, :, None]
-        np.copyto(rgb, np.where(ground, self._ground_rgb, self._sky_rgb), where=empty)
+        np.copyto(rgb, np.where(ground, self._ground_rgb, self._sky_rgb), where=empty[:, :, None])
+        self.ground_visible = (ground_level_mask(view, depth, empty, aspect or width / height, _GROUND_LEVEL_Z)
+                               if ground_level else None)
         mask = np.asarray(seg, dtype=np.int64).reshape(height, width) if segmentation else None
         return rgb, mask
 

@@ -191,7 +191,7 @@ def _fill_region(img: np.ndarray, view: CameraView, region: GroundRegion, z: flo
     mask = np.zeros((h, w), np.uint8)
     cv2.fillPoly(mask, rings, 255, cv2.LINE_8, _SHIFT)  # even-odd over all rings: holes stay open
     if ground_visible is not None:
-        mask &= ground_visible.view(np.uint8) * np.uint8(255)
+        mask[~ground_visible] = 0
     a = float(region.alpha)
     layer = cv2.add(cv2.multiply(img, (1.0 - a,) * 3 + (0.0,)), tuple(a * c for c in col) + (0.0,))
     cv2.polylines(layer, rings, True, col, 1, cv2.LINE_AA, _SHIFT)

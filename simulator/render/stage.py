@@ -32,7 +32,7 @@ from simulator.scene_query import try_load_egl
 from worlds.geometry import Building
 
 __all__ = ["SKY_RGB", "UAV_COLORS", "Stage", "StaticGeometry", "ground_level_mask", "ground_mask", "load_geometry",
-           "ribbon_mesh"]
+           "pixel_ray_z", "ribbon_mesh"]
 
 SKY_RGB = (0.72, 0.82, 0.93)
 _EMPTY_DEPTH = 1.0 - 1e-7  # depth-buffer value of pixels nothing was drawn on
@@ -66,10 +66,10 @@ def ground_mask(view: CameraView, width: int, height: int, aspect: float) -> np.
     up and forward axes, ``x_i = 2 (i + 0.5) / W - 1``, ``y_j = 1 - 2 (j + 0.5) / H``); it sees ground where the
     ray's z component is negative.
     """
-    return _ray_z(view, width, height, aspect) < 0.0
+    return pixel_ray_z(view, width, height, aspect) < 0.0
 
 
-def _ray_z(view: CameraView, width: int, height: int, aspect: float) -> np.ndarray:
+def pixel_ray_z(view: CameraView, width: int, height: int, aspect: float) -> np.ndarray:
     """(H, W) z component of each pixel's viewing ray ``f + x_i tan(vfov/2) aspect s + y_j tan(vfov/2) u``."""
     V = view.view_matrix()
     right, up, fwd = V[0, :3], V[1, :3], -V[2, :3]
@@ -79,16 +79,15 @@ def _ray_z(view: CameraView, width: int, height: int, aspect: float) -> np.ndarr
     return fwd[2] + x[None, :] * right[2] + y[:, None] * up[2]
 
 
-def ground_level_mask(view: CameraView, zbuf: np.ndarray, empty: np.ndarray, aspect: float,
+def ground_level_mask(view: CameraView, zbuf: np.ndarray, empty: np.ndarray, ray_z: np.ndarray,
                       max_z: float) -> np.ndarray:
     """(H, W) bool: pixels that show the ground, nothing in front of it: painted ground (``empty`` pixels whose ray
-    goes down, :func:`ground_mask`) or a drawn surface below ``max_z`` m (roads).
+    goes down) or a drawn surface below ``max_z`` m (roads). ``ray_z`` is the z component of each pixel's ray
+    (:func:`pixel_ray_z`).
 
     A drawn pixel's surface lies at ``eye + d (f + x_i s + y_j u)`` (the ray of :func:`ground_mask`), ``d`` its
     distance along the optical axis from the depth buffer value ``z``: ``d = far near / (far − (far − near) z)``.
     """
-    height, width = zbuf.shape
-    ray_z = _ray_z(view, width, height, aspect)
     n, f = view.near, view.far
     d = f * n / (f - (f - n) * np.minimum(zbuf, _EMPTY_DEPTH))
     return np.where(empty, ray_z < 0.0, view.eye_W[2] + d * ray_z < max_z)
@@ -271,10 +270,10 @@ class Stage:
         rgb = np.ascontiguousarray(np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3])
         depth = np.asarray(zbuf).reshape(height, width)
         empty = depth >= _EMPTY_DEPTH
-        ground = ground_mask(view, width, height, aspect or width / height)[:, :, None]
+        ray_z = pixel_ray_z(view, width, height, aspect or width / height)
+        ground = (ray_z < 0.0)[:, :, None]  # ground_mask, from the rays computed once for both masks
         np.copyto(rgb, np.where(ground, self._ground_rgb, self._sky_rgb), where=empty[:, :, None])
-        self.ground_visible = (ground_level_mask(view, depth, empty, aspect or width / height, _GROUND_LEVEL_Z)
-                               if ground_level else None)
+        self.ground_visible = ground_level_mask(view, depth, empty, ray_z, _GROUND_LEVEL_Z) if ground_level else None
         mask = np.asarray(seg, dtype=np.int64).reshape(height, width) if segmentation else None
         return rgb, mask
 

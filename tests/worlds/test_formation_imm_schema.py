@@ -1,12 +1,12 @@
 """World files of paper 003's pieces (estimator imm, fusion measurements, guidance formation): good ones load with
 their defaults, and every bad key is named with its path, its value and what was expected, before anything runs."""
 
-from pathlib import Path
 
 import pytest
 
 from worlds.errors import WorldError
 from worlds.loader import load_world
+from world_files import write
 
 TEAM = """\
 name: team
@@ -30,12 +30,6 @@ uavs:
       fusion: {method: measurements}
       guidance: {type: formation}
 """
-
-
-def write(tmp_path: Path, text: str) -> Path:
-    path = tmp_path / "w.yaml"
-    path.write_text(text)
-    return path
 
 
 def test_the_new_keys_load_with_their_defaults(tmp_path):

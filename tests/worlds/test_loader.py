@@ -6,6 +6,7 @@ import pytest
 
 from worlds.errors import WorldError
 from worlds.loader import load_world, parse_key_path, parse_override, shipped_worlds
+from world_files import write
 
 GOOD = """\
 name: tiny
@@ -16,12 +17,6 @@ uavs:
     sensors:
       - {type: radar, rate_hz: 2, sigma_range: 20, sigma_azimuth_deg: 1, sigma_elevation_deg: 1}
 """
-
-
-def write(tmp_path: Path, text: str, name: str = "w.yaml") -> Path:
-    path = tmp_path / name
-    path.write_text(text)
-    return path
 
 
 def error_of(path: Path, overrides=()) -> WorldError:

@@ -2,12 +2,12 @@
 what their keys say, and every bad key is named with its path, its value and what was expected, before anything runs."""
 
 import math
-from pathlib import Path
 
 import pytest
 
 from worlds.errors import WorldError
 from worlds.loader import load_world
+from world_files import write
 
 RADAR = "{type: radar, rate_hz: 1, sigma_range: 2, sigma_azimuth_deg: 3, min_detectable_velocity: 0}"
 PLAN = "infoplan: {d_safe: 30, horizon: 2, heading_rates: 5}"
@@ -33,12 +33,6 @@ comms: {model: rayleigh, block_by_buildings: false, base_station: [-500, -800, 2
 uavs:
 """ + _uav("u1", 0, 50) + _uav("u2", 50, 60)
 U2_PLAN = f"altitude: 60, {PLAN}"
-
-
-def write(tmp_path: Path, text: str) -> Path:
-    path = tmp_path / "w.yaml"
-    path.write_text(text)
-    return path
 
 
 def test_the_new_keys_load_with_their_defaults(tmp_path):

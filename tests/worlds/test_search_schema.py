@@ -2,12 +2,12 @@
 loads with its settings, and every bad key is named with its path, its value and what was expected, before anything
 runs; a YAML alias is one place per use, so an override changes only the entry it names."""
 
-from pathlib import Path
 
 import pytest
 
 from worlds.errors import WorldError
 from worlds.loader import load_world
+from world_files import write
 
 TEAM = """\
 name: team
@@ -39,12 +39,6 @@ uavs:
       fusion: {method: sets}
       guidance: *search
 """
-
-
-def write(tmp_path: Path, text: str) -> Path:
-    path = tmp_path / "w.yaml"
-    path.write_text(text)
-    return path
 
 
 def test_a_search_team_loads_with_its_settings(tmp_path):

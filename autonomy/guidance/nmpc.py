@@ -76,6 +76,21 @@ compiled to C (:func:`autonomy.guidance.codegen.compiled_nlpsol`, cached on disk
 solvers are called through :class:`autonomy.guidance.codegen.BufferedCall` (no conversion): wall p50 / p95
 1.18 / 2.02 and 1.15 / 1.79 ms uncompiled → 0.81 / 1.31 and 0.82 / 1.34 ms, plans identical to the last bit.
 
+Fatrop (``solver="fatrop"``, :mod:`autonomy.guidance.nmpc_stage`): the same problem in stage-wise order, solved by
+a structure-exploiting interior point with the exact Hessian (Riccati recursion over the stages, compiled functions),
+started from the shifted plan; no tiers. An interior point does not profit from the warm start the way an active-set
+SQP does (≈ 15 iterations p50 whatever ``mu_init``), so on an easy orbit it is slower: benchmark problem p50 / p95
+1.6–2.0 / 2.6–2.8 ms against 0.64–0.71 / 1.05–1.14 ms tiered (same process, back to back). Where the Gauss–Newton tier
+fails it wins: on 481 warm problems captured from ``road_standoff`` (seed 1) its cost matched the tiered plan's
+(median relative difference −1e-8) with no failure. Paired 10-run ``road_standoff`` campaigns (physics car, the
+same run seeds), tiered → Fatrop: solve p95 12.4 / 11.6 → 6.9 / 6.8 ms, IPOPT retries per run 2.8 / 2.4 → 0.2 / 0.5,
+autonomy wall time per 120 s run 3.32 → 2.76 s (paired −0.56 ± 0.33 s, 95 % CI), real-time factor 9.27 → 10.2
+(+0.93 ± 0.85); standoff error −1.3 ± 2.9 / −0.1 ± 1.3 m, phase error +0.7 ± 4.1°, fused position error
+−0.23 ± 0.56 m: no change the ten runs resolve.
+``road_standoff`` therefore plans with Fatrop; ``helsinki_chase`` (keep-outs, three UAVs, where the Gauss–Newton tier
+mostly converges) stays tiered: autonomy time 2.75–3.69 s against 3.02–3.52 s per 60 s run over three seeds, a wash.
+Starting Fatrop as the second tier from the capped Gauss–Newton iterate was slower than either (p50 ≈ 10 ms).
+
 A local minimum seen in ``road_standoff`` (physics, stop-and-go car): when the car stops while a UAV flies against
 the orbit direction, the warm-started SQP can keep a slow looping plan (speed floor, heading rate at ±ω_max) that is a
 KKT point (accepted at 0 iterations) while a solve from the vector-field guess reaches a lower cost (seed 2, t = 105 s:
@@ -116,7 +131,8 @@ from autonomy.guidance.keepout import nearby_keepouts
 from autonomy.guidance.nmpc_config import NmpcConfig
 from autonomy.guidance.nmpc_problem import NX as _NX
 from autonomy.guidance.nmpc_problem import NU as _NU
-from autonomy.guidance.nmpc_problem import build_problem
+from autonomy.guidance.nmpc_problem import NmpcProblem, build_problem
+from autonomy.guidance.nmpc_stage import FatropSolver
 from autonomy.guidance.setpoints import UnicycleSetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.vector_field import VectorFieldGuidance
@@ -207,7 +223,10 @@ class NmpcStandoffGuidance(Guidance):
         nlp, wvar, P, lam_f, lam_g, H_gn = pb.nlp, pb.nlp["x"], pb.nlp["p"], pb.lam_f, pb.lam_g, pb.H_gn
         self._g_fun = BufferedCall(ca.Function("g", [wvar, P], [pb.nlp["g"]], ["x", "p"], ["g"]))
         self._f_fun = BufferedCall(ca.Function("f", [wvar, P], [pb.nlp["f"]], ["x", "p"], ["f"]))
-        if c.solver == "ipopt":  # IPOPT takes the upper triangle
+        if c.solver == "fatrop":  # exact Hessian, stage-wise (see nmpc_stage); no tiers
+            self._solver = self._fatrop(pb)
+            self._curv_solver = None
+        elif c.solver == "ipopt":  # IPOPT takes the upper triangle
             hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [ca.triu(H_gn)], *_HESS_IO)
             self._solver = BufferedCall(ca.nlpsol("nmpc", *self._solver_spec(nlp, hess, "gauss_newton")))
             self._curv_solver = None
@@ -224,6 +243,14 @@ class NmpcStandoffGuidance(Guidance):
         cold_opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-6,
                      "ipopt.max_iter": c.cold_start_max_iter}
         self._cold_solver = BufferedCall(ca.nlpsol("nmpc_cold", "ipopt", nlp, cold_opts))
+
+    def _fatrop(self, pb: NmpcProblem) -> FatropSolver:
+        """Fatrop on the stage-wise form of ``pb`` (:mod:`autonomy.guidance.nmpc_stage`)."""
+        c = self.config
+        solver = FatropSolver("nmpc_fatrop", pb, self._n_tm + self._n_bld,
+                              {"tol": c.fatrop_tol, "max_iter": c.fatrop_max_iter}, compiled=c.compiled)
+        self.compiled = self.compiled and solver.compiled
+        return solver
 
     def _nlpsol(self, name: str, plugin: str, nlp: dict, opts: dict) -> BufferedCall:
         """The fast solver ``name``: compiled (:mod:`autonomy.guidance.codegen`) when ``config.compiled``."""
@@ -456,7 +483,7 @@ class NmpcStandoffGuidance(Guidance):
         self._w0 = w
         self._lam_g0 = np.asarray(sol["lam_g"]).reshape(-1)
         self._lam_x0 = np.asarray(sol["lam_x"]).reshape(-1)
-        if solver is self._cold_solver:
+        if solver is self._cold_solver or isinstance(solver, FatropSolver):  # interior-point multipliers
             self._lam_g0, self._lam_x0 = self._active_multipliers(w, np.asarray(sol["g"]).reshape(-1), self._lam_g0,
                                                                   self._lam_x0)
         return True, t_solve, status

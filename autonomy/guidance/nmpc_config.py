@@ -94,9 +94,11 @@ class NmpcConfig:
         Keep-out slots of the solver (nearest buildings first), >= 0.
     altitude, min_altitude, max_altitude : float
         Planning altitude and the band it is clamped to (m); the plan is 2-D at the clamped altitude.
-    solver : {"sqp", "ipopt", "rti"}
-        "sqp": CasADi sqpmethod + qrqp (default: fastest, see :mod:`autonomy.guidance.nmpc`); "ipopt": interior point,
-        warm-started; "rti": one SQP iteration per call (real-time iteration).
+    solver : {"sqp", "fatrop", "ipopt", "rti"}
+        "sqp": CasADi sqpmethod + qrqp with the ``hessian`` below (see :mod:`autonomy.guidance.nmpc`); "fatrop": the
+        structure-exploiting interior point Fatrop with the exact Hessian on the stage-wise problem
+        (:mod:`autonomy.guidance.nmpc_stage`); "ipopt": interior point, warm-started; "rti": one SQP iteration per
+        call (real-time iteration).
     hessian : {"tiered", "gauss_newton", "constraint_curvature"}
         Hessian of the fast solver's QPs: "gauss_newton" σ J_Rᵀ J_R of the least-squares cost only;
         "constraint_curvature" adds the exact curvature Σ λ_j ∇²g_j of the dynamics and constraints, made positive
@@ -116,6 +118,10 @@ class NmpcConfig:
         to the next tier.
     cold_start_max_iter : int
         Iteration cap of the exact-Hessian IPOPT used for cold starts (no previous plan), >= 1.
+    fatrop_max_iter : int
+        Iteration cap of Fatrop (``solver="fatrop"``), >= 1; a capped solve fails (and is retried, ``robust_retry``).
+    fatrop_tol : float
+        Convergence tolerance of Fatrop (its ``tol``), > 0.
     robust_retry : bool
         When the warm-started fast solver fails, solve once more from the same guess with the exact-Hessian IPOPT of
         cold starts before falling back (slower, counted in ``retries``). Measured in ``road_standoff`` (seed 2,
@@ -162,13 +168,15 @@ class NmpcConfig:
     altitude: float = 60.0
     min_altitude: float = 20.0
     max_altitude: float = 120.0
-    solver: Literal["sqp", "ipopt", "rti"] = "sqp"
+    solver: Literal["sqp", "fatrop", "ipopt", "rti"] = "sqp"
     hessian: Literal["gauss_newton", "constraint_curvature", "tiered"] = "tiered"
     convexify: Literal["eigen-clip", "eigen-reflect", "regularize"] = "eigen-clip"
     convexify_margin: float = 1e-6
     max_iter: int = 15
     gauss_newton_max_iter: int = 6
     cold_start_max_iter: int = 200
+    fatrop_max_iter: int = 100
+    fatrop_tol: float = 1e-6
     robust_retry: bool = True
     time_budget_s: float = 0.02
     enforce_time_budget: bool = False
@@ -180,7 +188,7 @@ class NmpcConfig:
 
     def __post_init__(self) -> None:
         for name in ("standoff_radius", "nominal_speed", "speed_deviation", "max_heading_rate", "dt",
-                     "separation_distance", "time_budget_s"):
+                     "separation_distance", "time_budget_s", "fatrop_tol"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"NmpcConfig.{name} must be > 0, got {v}")
@@ -193,7 +201,7 @@ class NmpcConfig:
             raise ValueError(f"NmpcConfig.min_speed must be < nominal_speed + speed_deviation, got {self.min_speed}")
         for name, lo in (("horizon", 2), ("substeps", 1), ("team_size", 1), ("max_buildings", 0), ("max_iter", 1),
                          ("gauss_newton_max_iter", 1),
-                         ("cold_start_max_iter", 1), ("fallback_max_shift", 0)):
+                         ("cold_start_max_iter", 1), ("fatrop_max_iter", 1), ("fallback_max_shift", 0)):
             v = getattr(self, name)
             if int(v) != v or v < lo:
                 raise ValueError(f"NmpcConfig.{name} must be an integer >= {lo}, got {v}")
@@ -214,8 +222,8 @@ class NmpcConfig:
         if self.convexify not in ("eigen-clip", "eigen-reflect", "regularize"):
             raise ValueError(f"NmpcConfig.convexify must be 'eigen-clip', 'eigen-reflect' or 'regularize', "
                              f"got {self.convexify!r}")
-        if self.solver not in ("sqp", "ipopt", "rti"):
-            raise ValueError(f"NmpcConfig.solver must be 'sqp', 'ipopt' or 'rti', got {self.solver!r}")
+        if self.solver not in ("sqp", "fatrop", "ipopt", "rti"):
+            raise ValueError(f"NmpcConfig.solver must be 'sqp', 'fatrop', 'ipopt' or 'rti', got {self.solver!r}")
 
     @property
     def separation(self) -> float:

@@ -34,20 +34,21 @@ def _nmpc_times(solver: str, steps: int = 240, **overrides: object) -> tuple[flo
 
 
 @benchmark("guidance_nmpc", produces=("nmpc_solve_ms_p50", "nmpc_solve_ms_p95", "nmpc_solve_cpu_ms_p95",
-                                      "nmpc_uncompiled_solve_ms_p95", "nmpc_ipopt_solve_ms_p50",
-                                      "nmpc_rti_solve_ms_p50"))
+                                      "nmpc_uncompiled_solve_ms_p95", "nmpc_fatrop_solve_ms_p50",
+                                      "nmpc_fatrop_solve_ms_p95", "nmpc_ipopt_solve_ms_p50", "nmpc_rti_solve_ms_p50"))
 def bench_nmpc() -> list[BenchRecord]:
     """NMPC standoff tracking, default solver (tiered SQP + qrqp, compiled functions), plus the same solver
-    uncompiled, IPOPT and RTI for comparison (the uncompiled runs alternate with the compiled ones, so their ratio
-    is measured under the same load).
+    uncompiled, Fatrop (``road_standoff``'s solver), IPOPT and RTI for comparison (the uncompiled and Fatrop runs
+    alternate with the default ones, so their ratios are measured under the same load).
 
     ``nmpc_solve_cpu_ms_p95`` is the thread CPU time of the same calls: on a shared machine the wall-time tail
     mostly measures preemption by other processes. The first run on a machine compiles the solver (cached).
     """
-    runs, vm = [], []
+    runs, vm, fat = [], [], []
     for _ in range(_REPEATS):
         runs.append(_nmpc_times("sqp"))
         vm.append(_nmpc_times("sqp", compiled=False)[1])
+        fat.append(_nmpc_times("fatrop"))
     p50 = float(np.median([r[0] for r in runs]))
     p95 = float(np.median([r[1] for r in runs]))
     cpu95 = float(np.median([r[2] for r in runs]))
@@ -58,6 +59,10 @@ def bench_nmpc() -> list[BenchRecord]:
         BenchRecord(name="nmpc_solve_ms_p95", value=p95, unit="ms", target=2.0, better="lower"),
         BenchRecord(name="nmpc_solve_cpu_ms_p95", value=cpu95, unit="ms", target=2.0, better="lower"),
         BenchRecord(name="nmpc_uncompiled_solve_ms_p95", value=float(np.median(vm)), unit="ms", better="lower"),
+        BenchRecord(name="nmpc_fatrop_solve_ms_p50", value=float(np.median([r[0] for r in fat])), unit="ms",
+                    better="lower"),
+        BenchRecord(name="nmpc_fatrop_solve_ms_p95", value=float(np.median([r[1] for r in fat])), unit="ms",
+                    better="lower"),
         BenchRecord(name="nmpc_ipopt_solve_ms_p50", value=ipopt, unit="ms", better="lower"),
         BenchRecord(name="nmpc_rti_solve_ms_p50", value=rti, unit="ms", better="lower"),
     ]

@@ -35,6 +35,8 @@ class Config:
         for i in range(len(UAVS)):
             sets += [f"uavs[{i}].autonomy.estimator.type={self.estimator}",
                      f"uavs[{i}].autonomy.guidance.type={self.guidance}"]
+            if self.guidance != "nmpc":  # the world's guidance params are the NMPC's (its solver)
+                sets.append(f"uavs[{i}].autonomy.guidance.params={{}}")
         return tuple(sets)
 
 
@@ -224,11 +226,11 @@ def reproduce(ctx: ReproContext) -> PaperReport:
 Physics world `{WORLD}` (see its header): two survey quadrotors with 2-D GMTI radars (range and azimuth; UAV1 σ =
 20 m / 7°, UAV2 30 m / 5°, 2 Hz) and a sedan driving a seeded random walk with stop-and-go at junctions through a
 procedural 600 m × 600 m town with curved arterials; Singer target model (α = 0.6, σa = 0.66); state-vector
-(convex) fusion of the two UAVs' estimates; NMPC standoff guidance (or the Lyapunov vector field, LVFG) at 2 Hz
-with r_d = 150 m. {"Quick mode: " + str(QUICK_DURATION_S) + " s runs." if ctx.quick else "120 s per run."} Six
-campaigns (`skytrack campaign {WORLD} --set uavs[i].autonomy.estimator.type=… --set
-uavs[i].autonomy.guidance.type=…`), one per column; their run directories are kept under `campaigns/` beside this
-report.
+(convex) fusion of the two UAVs' estimates; NMPC standoff guidance (solved by Fatrop) or the Lyapunov vector field
+(LVFG) at 2 Hz with r_d = 150 m. {"Quick mode: " + str(QUICK_DURATION_S) + " s runs." if ctx.quick else
+"120 s per run."} Six campaigns (`skytrack campaign {WORLD} --set uavs[i].autonomy.estimator.type=… --set
+uavs[i].autonomy.guidance.type=…`, LVFG also `--set uavs[i].autonomy.guidance.params={{}}`), one per column; their
+run directories are kept under `campaigns/` beside this report.
 """,
         tables=(t2, t3, t4), figures=(_figure(ctx, cols_p, stand),), findings=tuple(findings),
         deviations=(

@@ -16,7 +16,7 @@ from worlds.geometry import Building
 RD = 120.0
 
 
-@pytest.mark.parametrize("solver", ["sqp", pytest.param("ipopt", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("solver", ["sqp", "fatrop", pytest.param("ipopt", marks=pytest.mark.slow)])
 def test_standoff_and_phase_against_constant_velocity_target(solver):
     cfg = NmpcConfig(standoff_radius=RD, solver=solver)
     laws = [NmpcStandoffGuidance(cfg, 0), NmpcStandoffGuidance(cfg, 1)]

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-
-from typing import TYPE_CHECKING
 
 from simulator.reproduce.report import Figure, Finding, MeanCI, PaperReport, ReproContext, Table, mean_ci
 
@@ -70,17 +69,22 @@ SPLIT_COLUMNS = (("EKF fused", "ekf_nmpc"), ("MAEKF fused, road", "maekf_nmpc"),
 
 
 def _error_split(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
-                 idx: list[int]) -> tuple[Table, dict[str, dict]]:
+                 idx: list[int]) -> tuple[Table | None, dict[str, dict]]:
     """Along / across-road split of the fused estimates' error (:mod:`simulator.reproduce.road_error`) per column
-    of :data:`SPLIT_COLUMNS`: the table, and per column the per-run arrays of each component."""
+    of :data:`SPLIT_COLUMNS`, over the runs every column could split: the table (``None`` without such runs), and per
+    column the per-run arrays of each component (paired across columns)."""
     from simulator.reproduce.road_error import JUNCTION_BINS, split_run
 
+    per_run = {name: {i: split_run(ctx.out_dir / "campaigns" / cfg / reports[cfg][i].run_dir) for i in idx}
+               for name, cfg in SPLIT_COLUMNS}
+    both = [i for i in idx if all(per_run[name][i] is not None for name, _ in SPLIT_COLUMNS)]
+    if not both:
+        return None, {}
     cols: dict[str, dict] = {}
-    for name, cfg in SPLIT_COLUMNS:
-        splits = [split_run(ctx.out_dir / "campaigns" / cfg / reports[cfg][i].run_dir) for i in idx]
-        splits = [sp for sp in splits if sp is not None]
+    for name, _ in SPLIT_COLUMNS:
+        splits = [per_run[name][i] for i in both]
         cols[name] = {k: np.array([getattr(sp, k) for sp in splits])
-                      for k in ("mean_error", "along_mean", "cross_mean", "along_rms", "cross_rms")}
+                      for k in ("along_mean", "cross_mean", "along_rms", "cross_rms")}
         cols[name]["by_bin"] = np.array([sp.along_mean_by_bin for sp in splits])
         cols[name]["share"] = np.array([sp.share_by_bin for sp in splits])
     edges = [f"{lo:.0f}–{hi:.0f} m" if np.isfinite(hi) else f"≥ {lo:.0f} m"
@@ -95,23 +99,27 @@ def _error_split(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
                   columns=("column", "RMS along", "RMS across", "mean along (bias)", "mean across (bias)",
                            *(f"mean along, {e} from a junction" for e in edges)),
                   rows=tuple(rows),
-                  note="Each fused estimate's error in the car's frame (along: positive ahead of the car; across: "
-                       "positive left), from the runs' records (`simulator.reproduce.road_error`); mean ± 95 % CI "
-                       "over runs of each run's figure. The car spends "
-                       + ", ".join(f"{100 * f:.0f} %" for f in share) + " of the time in the distance bins "
-                       + ", ".join(edges) + " from its nearer junction. A road constraint can only remove the "
-                       "across-road part.")
+                  note=f"Each fused estimate's error in the car's frame (along: positive ahead of the car; across: "
+                       f"positive left), from the records of the {len(both)} runs every column could split "
+                       "(`simulator.reproduce.road_error`); mean ± 95 % CI over runs of each run's figure. Of the "
+                       "EKF's fused estimates, " + ", ".join(f"{100 * f:.0f} %" for f in share)
+                       + " fall at " + ", ".join(edges) + " from the car's nearer junction. A road constraint acts "
+                       "directly on the across-road part only.")
     return table, cols
 
 
 def _split_text(ref: dict, con: dict) -> str:
-    """What the error split says about a constrained column ``con`` against the unconstrained ``ref``."""
+    """What the error split says about a constrained column ``con`` against the unconstrained ``ref`` (paired
+    per-run arrays of :func:`_error_split`)."""
+    if not ref or not con:
+        return ""
     m = {k: (float(np.mean(ref[k])), float(np.mean(con[k]))) for k in ("cross_rms", "along_rms", "along_mean")}
-    text = (f"Across-road RMS error {m['cross_rms'][0]:.1f} → {m['cross_rms'][1]:.1f} m, along-road RMS "
-            f"{m['along_rms'][0]:.1f} → {m['along_rms'][1]:.1f} m (mean {m['along_mean'][0]:.1f} → "
-            f"{m['along_mean'][1]:.1f} m; negative: behind the car)")
+    d_along = _paired(con["along_rms"], ref["along_rms"])
+    text = (f" Across-road RMS error {m['cross_rms'][0]:.1f} → {m['cross_rms'][1]:.1f} m; along-road RMS "
+            f"{m['along_rms'][0]:.1f} → {m['along_rms'][1]:.1f} m (paired {d_along.text()} m), mean along "
+            f"{m['along_mean'][0]:.1f} → {m['along_mean'][1]:.1f} m (negative: behind the car)")
     if m["along_rms"][1] > m["cross_rms"][1]:
-        text += "; the along-road part, which a road constraint cannot remove, dominates"
+        text += "; the along-road part, on which the constraint does not act directly, is the larger"
     return text + " (error split below)"
 
 
@@ -240,18 +248,18 @@ def reproduce(ctx: ReproContext) -> PaperReport:
 
     t_split, split = _error_split(ctx, reports, idx)
     findings = []
-    ekf_split = split["EKF fused"]
+    ekf_split = split.get("EKF fused", {})
     for name in ("MAEKF fused, road", "ECUKF fused, road"):
         d = _paired(cols_p[name], cols_p["EKF fused"])
         cut = _rel(cols_p[name], cols_p["EKF fused"])
-        sp = split[name]
+        sp = split.get(name, {})
         findings.append(Finding(
             claim=f"Road constraints cut the position error by ≈ 46–48 % ({name} vs EKF fused)",
             verdict="reproduced" if _below(d) and cut >= 0.30 else "not reproduced",
             why=f"ours: {abs(100 * cut):.0f} % {'lower' if cut >= 0 else 'higher'} (paired difference {d.text()} m); "
                 f"paper: "
                 f"{100 * (1 - PAPER_TABLE_II[name][0] / PAPER_TABLE_II['EKF fused'][0]):.0f} %. Rule: significantly "
-                f"lower and at least 30 % lower. {_split_text(ekf_split, sp)}"))
+                f"lower and at least 30 % lower.{_split_text(ekf_split, sp)}"))
     best_single = np.fmin(cols_p["EKF UAV1"], cols_p["EKF UAV2"])
     d = _paired(cols_p["EKF fused"], best_single)
     findings.append(Finding(
@@ -296,7 +304,8 @@ uavs[i].autonomy.guidance.type=…`, LVFG also `--set uavs[i].autonomy.guidance.
 run directories are kept under `campaigns/` beside this report. The runs' own wall times add up to
 {_run_time(reports, idx):.0f} s (an interrupted campaign resumes, so this command's wall time can be shorter).
 """,
-        tables=(t2, t_split, t3, t4), figures=(_figure(ctx, cols_p, stand),), findings=tuple(findings),
+        tables=tuple(t for t in (t2, t_split, t3, t4) if t is not None), figures=(_figure(ctx, cols_p, stand),),
+        findings=tuple(findings),
         deviations=(
             "Quadrotors, not fixed-wing aircraft: standoff 150 m (paper 500 m), nominal speed 12 m/s (paper 40 m/s).",
             "The Devizes traffic data is not public: a procedural town and a physics car with a stop-and-go driver.",

@@ -70,31 +70,36 @@ def split_error(est_xy: np.ndarray, truth_xy: np.ndarray, truth_yaw: np.ndarray,
 
 
 def road_lengths(geometry: Path) -> dict[str, float]:
-    """Length (m) of every road of a run's ``geometry.npz`` (its centre-line polyline, sampled every 5 m)."""
+    """Length (m) of every road of a run's ``geometry.npz`` (its centre-line polyline, sampled every 5 m: a little
+    short on curves)."""
     g = np.load(geometry)
     xy, off = g["road_xy"], g["road_offsets"]
     return {str(rid): float(np.linalg.norm(np.diff(xy[off[i]:off[i + 1]], axis=0), axis=1).sum())
             for i, rid in enumerate(g["road_ids"])}
 
 
-def split_run(run_dir: Path, vehicle: int = 0, stream: str = "fused_estimates") -> ErrorSplit | None:
-    """:func:`split_error` of the valid estimates of ``stream`` (every UAV's) in a run directory, against ground
-    vehicle ``vehicle``'s truth at the estimates' times; ``None`` without estimates."""
+def split_run(run_dir: Path, stream: str = "fused_estimates") -> ErrorSplit | None:
+    """:func:`split_error` of the valid estimates of ``stream`` (every UAV's) in a run directory, against the
+    tracked ground vehicle's truth (``target_index`` of the metrics) at the nearest recorded time; ``None`` when the
+    run has no such estimates or truth."""
     from simulator.runrecord import load_run
 
     rec = load_run(run_dir)
-    est, truth = rec.stream(stream), rec.stream("vehicle_truth")
-    if not est or not truth:
+    if stream not in rec.streams or "vehicle_truth" not in rec.streams:
         return None
-    sel = truth["vehicle"] == vehicle
+    est, truth = rec.stream(stream), rec.stream("vehicle_truth")
+    sel = truth["vehicle"] == int(rec.metrics.get("target_index", 0) or 0)
     truth = {k: v[sel] for k, v in truth.items()}
     ok = est["valid"].astype(bool)
     if not ok.any() or len(truth["t"]) == 0:
         return None
-    t = est["t"][ok]
-    i = np.clip(np.searchsorted(truth["t"], t - 1e-9), 0, len(truth["t"]) - 1)  # truth at (or just after) t
+    t, tt = est["t"][ok], truth["t"]
+    i = np.zeros(len(t), dtype=int)
+    if len(tt) > 1:  # the nearest truth sample
+        j = np.clip(np.searchsorted(tt, t), 1, len(tt) - 1)
+        i = np.where(np.abs(tt[j - 1] - t) <= np.abs(tt[j] - t), j - 1, j)
     lengths = road_lengths(Path(run_dir) / "geometry.npz")
     s = truth["s"][i]
-    to_end = np.array([lengths.get(str(r), np.inf) for r in truth["road"][i]]) - s
+    to_end = np.maximum(np.array([lengths.get(str(r), np.inf) for r in truth["road"][i]]) - s, 0.0)
     return split_error(np.column_stack([est["x"][ok], est["y"][ok]]), np.column_stack([truth["x"][i], truth["y"][i]]),
-                       truth["yaw"][i], np.minimum(s, to_end))
+                       truth["yaw"][i], np.minimum(np.maximum(s, 0.0), to_end))

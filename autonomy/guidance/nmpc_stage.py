@@ -129,6 +129,7 @@ class FatropSolver:
             fun, self.compiled = ca.nlpsol(name, "fatrop", nlp, sopts), False
         self._call = BufferedCall(fun)
         self._lbg_idx = np.where(self._g_idx >= 0, self._g_idx, 0)
+        self._sigma = np.array([lay.v(k) + NU for k in range(n)], dtype=int)  # σ_k in the stage-wise vector
 
     def _to_stage(self, v_kind: np.ndarray, z0: np.ndarray) -> np.ndarray:
         out = np.asarray(v_kind, dtype=float).reshape(-1)[np.maximum(self._w_idx, 0)]
@@ -144,10 +145,15 @@ class FatropSolver:
                  ubg: np.ndarray, lam_g0: np.ndarray | None = None,
                  lam_x0: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Solve from the by-kind guess ``x0``; the solution in the by-kind layout (``g`` and ``lam_g`` without the
-        slack rows, ``lam_x`` of the slack from its bound on the state)."""
+        slack rows, ``lam_x`` of the slack from its bound on the state). Fatrop starts from the primal guess alone:
+        ``lam_g0`` / ``lam_x0`` are passed on but it does not use them."""
         p = np.asarray(p, dtype=float).reshape(-1)
         xi = np.concatenate([p[0:NX], [0.0]])
-        args = {"x0": self._to_stage(x0, xi), "p": p, "lbx": self._to_stage(lbx, xi), "ubx": self._to_stage(ubx, xi),
+        lbx_s, ubx_s = self._to_stage(lbx, xi), self._to_stage(ubx, xi)
+        # the slack's bound holds on the state s_{k+1} only: bounding σ_k = s_{k+1} too would make the two active
+        # bounds linearly dependent with the gap row, and the barrier would split the multiplier between them
+        lbx_s[self._sigma], ubx_s[self._sigma] = -np.inf, np.inf
+        args = {"x0": self._to_stage(x0, xi), "p": p, "lbx": lbx_s, "ubx": ubx_s,
                 "lbg": self._rows(lbg, 0.0), "ubg": self._rows(ubg, 0.0)}
         if lam_g0 is not None:
             args["lam_g0"] = self._rows(lam_g0, 0.0)

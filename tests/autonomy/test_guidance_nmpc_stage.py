@@ -63,6 +63,11 @@ def test_fatrop_reaches_the_ipopt_optimum_with_active_soft_constraints():
     path = gv.reshape(cfg.horizon, -1)[:, NX:]
     assert path.min() < 1e-4
     np.testing.assert_allclose(fat["lam_g"], ref["lam_g"], atol=1e-2 * max(1.0, np.abs(ref["lam_g"]).max()))
+    # bound multipliers too, the slack's among them (its bound sits on the stage state alone)
+    np.testing.assert_allclose(fat["lam_x"], ref["lam_x"], atol=1e-2 * max(1.0, np.abs(ref["lam_x"]).max()))
+    n = cfg.horizon
+    assert np.abs(ref["lam_x"][-n:]).max() > 0.5  # the slack bounds are active here
+    np.testing.assert_allclose(fat["lam_x"][-n:], ref["lam_x"][-n:], atol=2e-2)
 
 
 @pytest.mark.parametrize("field, value", [("fatrop_max_iter", 0), ("fatrop_tol", 0.0), ("solver", "hpipm")])

@@ -483,7 +483,7 @@ class NmpcStandoffGuidance(Guidance):
         self._w0 = w
         self._lam_g0 = np.asarray(sol["lam_g"]).reshape(-1)
         self._lam_x0 = np.asarray(sol["lam_x"]).reshape(-1)
-        if solver is self._cold_solver or isinstance(solver, FatropSolver):  # interior-point multipliers
+        if solver is self._cold_solver:
             self._lam_g0, self._lam_x0 = self._active_multipliers(w, np.asarray(sol["g"]).reshape(-1), self._lam_g0,
                                                                   self._lam_x0)
         return True, t_solve, status

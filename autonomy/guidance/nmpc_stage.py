@@ -136,30 +136,26 @@ class FatropSolver:
         out[self.layout.z(0):self.layout.z(0) + _NZ] = z0
         return out
 
-    def _rows(self, v_kind: np.ndarray, slack_value: float) -> np.ndarray:
+    def _rows(self, v_kind: np.ndarray) -> np.ndarray:
+        """Constraint bounds in stage-wise order; the slack rows are equalities (0)."""
         out = np.asarray(v_kind, dtype=float).reshape(-1)[self._lbg_idx]
-        out[self._g_idx < 0] = slack_value
+        out[self._g_idx < 0] = 0.0
         return out
 
     def __call__(self, *, x0: np.ndarray, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, lbg: np.ndarray,
                  ubg: np.ndarray, lam_g0: np.ndarray | None = None,
                  lam_x0: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Solve from the by-kind guess ``x0``; the solution in the by-kind layout (``g`` and ``lam_g`` without the
-        slack rows, ``lam_x`` of the slack from its bound on the state). Fatrop starts from the primal guess alone:
-        ``lam_g0`` / ``lam_x0`` are passed on but it does not use them."""
+        slack rows, ``lam_x`` of the slack from its bound on the state). Fatrop starts from the primal guess alone
+        (it does not use multiplier guesses), so ``lam_g0`` / ``lam_x0`` are accepted, like the SQP's, and dropped."""
         p = np.asarray(p, dtype=float).reshape(-1)
         xi = np.concatenate([p[0:NX], [0.0]])
         lbx_s, ubx_s = self._to_stage(lbx, xi), self._to_stage(ubx, xi)
         # the slack's bound holds on the state s_{k+1} only: bounding σ_k = s_{k+1} too would make the two active
         # bounds linearly dependent with the gap row, and the barrier would split the multiplier between them
         lbx_s[self._sigma], ubx_s[self._sigma] = -np.inf, np.inf
-        args = {"x0": self._to_stage(x0, xi), "p": p, "lbx": lbx_s, "ubx": ubx_s,
-                "lbg": self._rows(lbg, 0.0), "ubg": self._rows(ubg, 0.0)}
-        if lam_g0 is not None:
-            args["lam_g0"] = self._rows(lam_g0, 0.0)
-        if lam_x0 is not None:
-            args["lam_x0"] = self._to_stage(lam_x0, np.zeros(_NZ))
-        sol = self._call(**args)
+        sol = self._call(x0=self._to_stage(x0, xi), p=p, lbx=lbx_s, ubx=ubx_s, lbg=self._rows(lbg),
+                         ubg=self._rows(ubg))
         keep = self._g_idx >= 0
         g, lam_g = np.empty(int(keep.sum())), np.empty(int(keep.sum()))
         g[self._g_idx[keep]] = sol["g"][keep]

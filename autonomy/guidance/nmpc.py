@@ -83,10 +83,11 @@ SQP does (≈ 15 iterations p50 whatever ``mu_init``), so on an easy orbit it is
 1.6–2.0 / 2.6–2.8 ms against 0.64–0.71 / 1.05–1.14 ms tiered (same process, back to back). Where the Gauss–Newton tier
 fails it wins: on 481 warm problems captured from ``road_standoff`` (seed 1) its cost matched the tiered plan's
 (median relative difference −1e-8) with no failure. Paired 10-run ``road_standoff`` campaigns (physics car, the
-same run seeds), tiered → Fatrop: solve p95 12.4 / 11.6 → 6.9 / 6.8 ms, IPOPT retries per run 2.8 / 2.4 → 0.2 / 0.5,
-autonomy wall time per 120 s run 3.32 → 2.76 s (paired −0.56 ± 0.33 s, 95 % CI), real-time factor 9.27 → 10.2
-(+0.93 ± 0.85); standoff error −1.3 ± 2.9 / −0.1 ± 1.3 m, phase error +0.7 ± 4.1°, fused position error
-−0.23 ± 0.56 m: no change the ten runs resolve.
+same run seeds; ``skytrack campaign road_standoff --runs 10``, the tiered arm with
+``--set uavs[i].autonomy.guidance.params={}``), tiered → Fatrop: solve p95 13.8 / 12.8 → 6.5 / 6.6 ms, IPOPT
+retries per run 2.8 / 2.4 → 0.2 / 0.5, autonomy wall time per 120 s run 3.50 → 2.71 s (paired −0.78 ± 0.28 s,
+95 % CI), real-time factor 8.92 → 10.23 (+1.31 ± 0.80); standoff error −1.3 ± 2.9 / −0.1 ± 1.3 m, phase error
++0.7 ± 4.1°, fused position error −0.23 ± 0.56 m: no change the ten runs resolve.
 ``road_standoff`` therefore plans with Fatrop; ``helsinki_chase`` (keep-outs, three UAVs, where the Gauss–Newton tier
 mostly converges) stays tiered: autonomy time 2.75–3.69 s against 3.02–3.52 s per 60 s run over three seeds, a wash.
 Starting Fatrop as the second tier from the capped Gauss–Newton iterate was slower than either (p50 ≈ 10 ms).

@@ -1,7 +1,7 @@
 """Where a road-following target's estimation error lies: along the road or across it, and how far from a junction.
 
-A road constraint can only remove the error across the road, so how much it can cut depends on how the error
-splits. These helpers split each estimate's error in the truth's frame: ``along`` (positive ahead of the car) and
+A road constraint acts directly on the error across the road only, so how much it can cut depends on how the
+error splits. These helpers split each estimate's error in the truth's frame: ``along`` (positive ahead of the car) and
 ``cross`` (positive left of it), and bin the along-road part by the car's distance to the nearer end of its road (its
 last or next junction, where a stop-and-go car stands and starts), read from the run's record. Paper 002's report
 (:mod:`simulator.reproduce.paper_002`) tabulates them for the unconstrained and the road-constrained filters.
@@ -9,6 +9,7 @@ last or next junction, where a stop-and-go car stands and starts), read from the
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -81,14 +82,19 @@ def road_lengths(geometry: Path) -> dict[str, float]:
 def split_run(run_dir: Path, stream: str = "fused_estimates") -> ErrorSplit | None:
     """:func:`split_error` of the valid estimates of ``stream`` (every UAV's) in a run directory, against the
     tracked ground vehicle's truth (``target_index`` of the metrics) at the nearest recorded time; ``None`` when the
-    run has no such estimates or truth."""
-    from simulator.runrecord import load_run
+    run has no such estimates or truth. Reads only those two streams and the metrics (a third of loading the whole
+    record)."""
+    from simulator.runrecord import load_stream
 
-    rec = load_run(run_dir)
-    if stream not in rec.streams or "vehicle_truth" not in rec.streams:
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise FileNotFoundError(f"no run directory at {run_dir}")
+    est, truth = (load_stream(run_dir / "timeseries" / name) for name in (stream, "vehicle_truth"))
+    if not est or not truth:
         return None
-    est, truth = rec.stream(stream), rec.stream("vehicle_truth")
-    sel = truth["vehicle"] == int(rec.metrics.get("target_index", 0) or 0)
+    metrics_path = run_dir / "metrics.json"
+    metrics = json.loads(metrics_path.read_text()) if metrics_path.exists() else {}
+    sel = truth["vehicle"] == int(metrics.get("target_index", 0) or 0)
     truth = {k: v[sel] for k, v in truth.items()}
     ok = est["valid"].astype(bool)
     if not ok.any() or len(truth["t"]) == 0:
@@ -98,7 +104,7 @@ def split_run(run_dir: Path, stream: str = "fused_estimates") -> ErrorSplit | No
     if len(tt) > 1:  # the nearest truth sample
         j = np.clip(np.searchsorted(tt, t), 1, len(tt) - 1)
         i = np.where(np.abs(tt[j - 1] - t) <= np.abs(tt[j] - t), j - 1, j)
-    lengths = road_lengths(Path(run_dir) / "geometry.npz")
+    lengths = road_lengths(run_dir / "geometry.npz")
     s = truth["s"][i]
     to_end = np.maximum(np.array([lengths.get(str(r), np.inf) for r in truth["road"][i]]) - s, 0.0)
     return split_error(np.column_stack([est["x"][ok], est["y"][ok]]), np.column_stack([truth["x"][i], truth["y"][i]]),

@@ -7,6 +7,8 @@ API. Sensors: paper 002's two GMTI radars (σr, σφ) = (20 m, 7°) and (30 m, 5
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -208,3 +210,27 @@ def test_config_validation_names_the_field():
         RoadConstraintParams(velocity_update="both")
     with pytest.raises(ValueError, match="tracker"):
         RoadTrackerConfig(tracker="ekf")
+
+
+@pytest.mark.parametrize("variant", ["maekf", "ecukf"])
+def test_a_branch_that_lost_weight_at_the_junction_takes_it_back(variant):
+    """A car that waits at a junction stands on the line of another branch's child, which can gather nearly all the
+    weight before the car moves on (seen in ``road_standoff``). The child of the branch taken must survive that and take
+    the weight back once the car drives along its branch, without leaving the map."""
+    net = cross_network()
+    roads = [net.roads["main.f"], net.roads["east.f"]]
+    ts, ps, ids = drive(roads, 80.0, ((0.0, 12.0), (30.0, 5.0), (50.0, 11.0)))
+    k_j = ids.index("east.f")  # first scan with the car past the junction
+    for seed in range(3):
+        tr = RoadConstrainedTracker(RoadTrackerConfig(road=RoadFilterConfig(variant=variant)), net)
+        scans = radar_scans(ts, ps, np.random.default_rng(seed))
+        for t in ts[:k_j]:
+            tr.step(float(t), scans[float(t)])
+        f = tr.filter
+        assert {h.key()[-1] for h in f.hypotheses} == {"north.f", "east.f", "south.f"}
+        for h in f.hypotheses:  # as if the wait had favoured the left turn: east holds 3e-4 of the weight
+            h.log_w = {"north.f": 0.0, "east.f": math.log(3e-4 / (1 - 3e-4)), "south.f": -50.0}[h.key()[-1]]
+        log = [tr.step(float(t), scans[float(t)]) and tr.road_id for t in ts[k_j:]]
+        settled = ts[k_j:] >= ts[k_j] + 8.0
+        assert all(rid == "east.f" for rid, s in zip(log, settled, strict=True) if s)
+        assert f.detachments == 0 and tr.filter is f

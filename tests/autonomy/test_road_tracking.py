@@ -18,53 +18,17 @@ from autonomy.estimation.road.config import RoadFilterConfig
 from autonomy.estimation.road.network_filter import RoadNetworkFilter
 from autonomy.estimation.road.tracker import RoadConstrainedTracker, RoadTrackerConfig
 from autonomy.estimation.tracker import SingleTargetTracker
+from simulator.reproduce.road_replay import SCAN_DT, STOP_AND_GO, drive, sine_network, synthetic_scans
 from worlds.roads.network import RoadNetwork
 from worlds.roads.road import Road
 
-DT = 0.5  # s, radar period
-SENSORS = ((20.0, np.deg2rad(7.0)), (30.0, np.deg2rad(5.0)))
-STOP_AND_GO = ((0.0, 12.0), (20.0, 6.0), (35.0, 11.0), (60.0, 0.0), (78.0, 10.0), (105.0, 4.0), (115.0, 12.0))
-
-
-def speeds(t_end: float, dt: float, schedule, a_max: float = 1.0) -> np.ndarray:
-    """Speed (m/s) every ``dt`` s, moving toward the scheduled target speed at most ``a_max`` m/s²."""
-    v = np.empty(int(round(t_end / dt)) + 1)
-    v[0] = schedule[0][1]
-    for i in range(len(v) - 1):
-        target = [vt for ts, vt in schedule if ts <= i * dt][-1]
-        v[i + 1] = v[i] + np.clip(target - v[i], -a_max * dt, a_max * dt)
-    return v
-
-
-def drive(roads: list[Road], t_end: float, schedule, substeps: int = 20):
-    """Truth every DT s along consecutive roads in lane 0: times, positions (M, 2), road ids."""
-    dt = DT / substeps
-    v = speeds(t_end, dt, schedule)
-    k, s = 0, 0.0
-    ts, ps, ids = [], [], []
-    for i in range(len(v)):
-        if i % substeps == 0:
-            ts.append(i * dt)
-            ps.append(roads[k].point(s, roads[k].lane_offset(0)))
-            ids.append(roads[k].id)
-        s += v[i] * dt
-        while s > roads[k].length and k + 1 < len(roads):
-            s -= roads[k].length
-            k += 1
-    return np.array(ts), np.array(ps), ids
+DT = SCAN_DT  # s, radar period
 
 
 def radar_scans(ts: np.ndarray, ps: np.ndarray, rng: np.random.Generator) -> dict[float, list[Measurement]]:
-    out: dict[float, list[Measurement]] = {}
-    for t, p in zip(ts, ps, strict=True):
-        for j, (sr, sa) in enumerate(SENSORS):
-            phase = 0.08 * t + np.pi * j
-            p_s = np.array([p[0] + 500.0 * np.cos(phase), p[1] + 500.0 * np.sin(phase), 100.0])
-            d = np.array([p[0], p[1], 0.0]) - p_s
-            z = np.array([np.linalg.norm(d), np.arctan2(d[1], d[0])]) + rng.normal(size=2) * [sr, sa]
-            out.setdefault(float(t), []).append(
-                Measurement(z=z, R=np.diag([sr**2, sa**2]), t_meas=float(t), sensor_id=j, p_sensor_W=p_s))
-    return out
+    """Both radars' measurements at each time (one tracker fed by both)."""
+    per_radar = synthetic_scans(ts, ps, rng)
+    return {float(t): [m for scans in per_radar for m in scans[float(t)]] for t in ts}
 
 
 def run(tracker, ts, ps, scans) -> tuple[np.ndarray, list]:
@@ -76,14 +40,6 @@ def run(tracker, ts, ps, scans) -> tuple[np.ndarray, list]:
             err[k] = np.linalg.norm(est.p_W - ps[k])
         log.append((getattr(tracker, "road_id", None), getattr(tracker, "on_road", False)))
     return err, log
-
-
-def sine_network() -> RoadNetwork:
-    """A curved two-way street: vertices every 20 m on a 150 m-amplitude, 700 m-wavelength sine (radius >= 80 m)."""
-    x = np.arange(0.0, 1500.0 + 1e-9, 20.0)
-    y = 150.0 * np.sin(2 * np.pi * x / 700.0)
-    return RoadNetwork.from_spec({"nodes": {"a": [0.0, 0.0], "b": [x[-1], y[-1]]},
-                                  "streets": [{"id": "s", "nodes": ["a", "b"], "via": np.c_[x, y][1:-1].tolist()}]})
 
 
 def cross_network() -> RoadNetwork:

@@ -126,6 +126,7 @@ def _split_text(ref: dict, con: dict) -> str:
 REPLAY_CASES = (
     ("single_road", "One curved road, no junction; the paper's radars at 500 m (synthetic)"),
     ("town_paper", "The runs' town traffic (junctions, stops); the paper's radars at 500 m (synthetic)"),
+    ("town_paper_route", "As above, the road filters given the car's route (no junction to choose at)"),
     ("recorded", "The runs' own detections (150 m standoff), replayed"),
     ("recorded@sigma_a", "As above, Singer σa = the car's RMS acceleration"),
 )
@@ -142,12 +143,14 @@ def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
     n_single = len(idx)
     jobs = [ReplayJob("single_road", seed=ctx.seed * 100_003 + k, duration=40.0 if ctx.quick else 150.0)
             for k in range(n_single)]
-    jobs += [ReplayJob("town_paper", seed=ctx.seed * 100_003 + k, run_dir=d) for k, d in enumerate(dirs)]
+    for case in ("town_paper", "town_paper_route"):  # the same radar noise in both: paired
+        jobs += [ReplayJob(case, seed=ctx.seed * 100_003 + k, run_dir=d) for k, d in enumerate(dirs)]
     jobs += [ReplayJob("recorded", seed=0, run_dir=d, sigma_a=sigma_a) for d in dirs]
     res = ctx.map(run_job, jobs)
     by_case: dict[str, dict[str, np.ndarray]] = {}
-    chunks = {"single_road": res[:n_single], "town_paper": res[n_single:n_single + len(dirs)],
-              "recorded": res[n_single + len(dirs):]}
+    n = len(dirs)
+    chunks = {"single_road": res[:n_single], "town_paper": res[n_single:n_single + n],
+              "town_paper_route": res[n_single + n:n_single + 2 * n], "recorded": res[n_single + 2 * n:]}
     for case, _ in REPLAY_CASES:
         base, suffix = (case.split("@") + [""])[:2]
         key = (lambda k: f"{k}@{suffix}") if suffix else (lambda k: k)

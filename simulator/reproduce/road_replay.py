@@ -9,7 +9,9 @@ fusion, each UAV with the latest estimate its teammate shared), on the same dete
   two-way road with no junction, seen by the two radars of the paper from its 500 m standoff, 180° apart, orbiting at
   40 m/s;
 - :func:`town_truth` + :func:`synthetic_scans`: the car trajectories recorded in the physics runs (the town, its
-  junctions and stops) seen by those same synthetic radars;
+  junctions and stops) seen by those same synthetic radars, with the road filters on the whole town or only on the
+  car's route (:func:`route_network`: the paper assigns the car to the segments of its road; junctions are its
+  future work);
 - :func:`recorded_case`: the physics runs' own detections (150 m standoff, the UAVs as flown), replayed.
 
 :func:`fused_errors` runs one estimator type on a case and returns the errors the run metrics would give (mean
@@ -28,7 +30,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["ESTIMATORS", "PAPER_RADARS", "SCAN_DT", "STOP_AND_GO", "ReplayCase", "ReplayJob", "car_accel_rms", "drive",
-           "fused_errors", "recorded_case", "run_job", "sine_network",
+           "car_route", "fused_errors", "recorded_case", "route_network", "run_job", "sine_network",
            "single_road_case", "speeds", "synthetic_scans", "town_truth"]
 
 PAPER_RADARS = ((20.0, math.radians(7.0)), (30.0, math.radians(5.0)))
@@ -235,6 +237,31 @@ def town_truth(run_dir: str | Path) -> tuple[Any, np.ndarray, np.ndarray, float]
     return _network(run_dir, world), times[0], _car_truth(run_dir, ticks[0]), car_accel_rms(run_dir)
 
 
+def car_route(run_dir: str | Path, vehicle: int = 0) -> list[str]:
+    """The roads the car recorded in ``run_dir`` drove on, in order (each once)."""
+    from simulator.runrecord import load_stream
+
+    v = load_stream(Path(run_dir) / "timeseries" / "vehicle_truth")
+    out: list[str] = []
+    for rid in v["road"][v["vehicle"] == vehicle]:
+        rid = str(rid)
+        if rid and rid not in out:
+            out.append(rid)
+    return out
+
+
+def route_network(network: Any, route: list[str]) -> Any:
+    """The part of ``network`` a filter that knows the car's ``route`` needs: the route's roads and their twins (so
+    the direction is still the filter's to find), so that every road on it has its next one as its only successor
+    unless the route passes a junction twice."""
+    from worlds.roads.network import RoadNetwork
+
+    ids = set(route) | {network.roads[r].twin for r in route if network.roads[r].twin is not None}
+    roads = [network.roads[r] for r in sorted(ids)]
+    nodes = {n: network.nodes[n] for r in roads for n in (r.start_node, r.end_node)}
+    return RoadNetwork(roads, nodes)
+
+
 def recorded_case(run_dir: str | Path) -> ReplayCase:
     """The detections of a recorded run, handed to each UAV at the agent step they reached it in the run."""
     from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
@@ -318,7 +345,8 @@ ESTIMATORS = ("ekf", "maekf", "ecukf")
 @dataclass(frozen=True)
 class ReplayJob:
     """One run of an experiment: ``case`` is ``"single_road"`` (``seed`` draws the radar noise), ``"town_paper"``
-    (the car of ``run_dir`` seen by the paper's radars, noise from ``seed``) or ``"recorded"`` (the detections of
+    (the car of ``run_dir`` seen by the paper's radars, noise from ``seed``), ``"town_paper_route"`` (the same, the
+    road filters on the car's route only: :func:`route_network`) or ``"recorded"`` (the detections of
     ``run_dir``; with ``sigma_a`` also every estimator with that Singer σa, m/s²); ``duration`` (s) of the single-road
     drive."""
 
@@ -334,14 +362,17 @@ def run_job(job: ReplayJob) -> dict[str, float]:
     ``<type>@sigma_a``), and the car's RMS along-track acceleration (``accel_rms``, m/s²)."""
     if job.case == "single_road":
         case = single_road_case(job.seed, job.duration)
-    elif job.case == "town_paper":
+    elif job.case in ("town_paper", "town_paper_route"):
         net, ts, ps, accel = town_truth(job.run_dir)
+        if job.case == "town_paper_route":
+            net = route_network(net, car_route(job.run_dir))
         case = ReplayCase(network=net, times=[ts, ts], scans=synthetic_scans(ts, ps, np.random.default_rng(job.seed)),
                           truth=ps, estimator=_paper_estimator(net), fusion=_convex_fusion, accel_rms=accel)
     elif job.case == "recorded":
         case = recorded_case(job.run_dir)
     else:
-        raise ValueError(f"ReplayJob.case must be single_road, town_paper or recorded, got {job.case!r}")
+        raise ValueError(f"ReplayJob.case must be single_road, town_paper, town_paper_route or recorded, "
+                         f"got {job.case!r}")
     out = {kind: float(np.mean(fused_errors(case, kind)["fused"])) for kind in ESTIMATORS}
     if job.sigma_a is not None:
         model = {"singer_sigma_a": job.sigma_a}

@@ -13,13 +13,13 @@ from simulator.reproduce.road_replay import (ReplayJob, car_accel_rms, drive, fu
 
 @pytest.fixture(scope="module")
 def recorded_runs(tmp_path_factory):
-    """Two 15 s ``road_standoff`` runs: the world's EKF, and the ECUKF on the road map."""
+    """Two 30 s ``road_standoff`` runs (the car passes a junction): the world's EKF, and the ECUKF on the road map."""
     out = {}
     for kind in ("ekf", "ecukf"):
         d = tmp_path_factory.mktemp(kind)
         sets = [] if kind == "ekf" else sum((["--set", f"uavs[{i}].autonomy.estimator.type={kind}"] for i in (0, 1)),
                                             [])
-        assert main(["run", "road_standoff", "--duration", "15", "--quiet", "--no-plots", "--out", str(d), *sets]) == 0
+        assert main(["run", "road_standoff", "--duration", "30", "--quiet", "--no-plots", "--out", str(d), *sets]) == 0
         out[kind] = d
     return out
 
@@ -69,3 +69,17 @@ def test_synthetic_radars_measure_the_car_from_their_orbit():
     a0, a1 = (math.atan2(*(scans[0][float(t)][0].p_sensor_W[:2] - p)[::-1])
               for t, p in ((ts[0], ps[0]), (ts[1], ps[1])))
     assert (a1 - a0) == pytest.approx(40.0 / 500.0 * (ts[1] - ts[0]))
+
+
+def test_the_route_network_leaves_no_junction_to_choose_at(recorded_runs):
+    from simulator.reproduce.road_replay import car_route, route_network, town_truth
+
+    run = recorded_runs["ekf"]
+    net, ts, ps, _ = town_truth(run)
+    route = car_route(run)
+    assert len(route) >= 2
+    sub = route_network(net, route)
+    assert set(route) <= set(sub.roads) and len(sub.roads) <= 2 * len(route)
+    for a, b in zip(route[:-1], route[1:], strict=True):
+        assert sub.successors(a) == [b] and b in net.successors(a) and len(net.successors(a)) > 1
+    assert len(ts) == len(ps) and np.all(np.diff(ts) > 0)

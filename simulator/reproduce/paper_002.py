@@ -173,10 +173,10 @@ def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
              "estimate with its teammate's as in the runs (Table I's Singer model unless stated). Synthetic radars: "
              "the paper's two (20 m / 7°, 30 m / 5°, 2 Hz), 100 m up, circling the car at 500 m and 40 m/s, 180° "
              "apart. The single road is a two-way sine street (1.5 km, radius ≥ 80 m) driven for "
-             f"{jobs[0].duration:.0f} s of a stop-and-go schedule (speed changes at up to 1 m/s², target speed 0 from 60 s "
-             "to 78 s). The town cases use the "
-             "car and radar records of the EKF + NMPC campaign's runs; replaying a run with the estimator it flew "
-             "gives back its metrics exactly. Changes: mean of the paired per-run differences.")
+             f"{jobs[0].duration:.0f} s of a stop-and-go schedule (speed changes at up to 1 m/s², target speed 0 "
+             "from 60 s to 78 s). The town cases use the car and radar records of the EKF + NMPC campaign's runs; "
+             "replaying a run with the estimator it flew gives back its metrics exactly. Changes: mean of the "
+             "paired per-run differences.")
     c = by_case["single_road"]
     cuts = {k: (_rel(c[k], c["ekf"]), _paired(c[k], c["ekf"])) for k in ESTIMATORS[1:]}
     ok = all(_below(d) and cut >= 0.30 for cut, d in cuts.values())

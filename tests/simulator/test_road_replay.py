@@ -83,3 +83,21 @@ def test_the_route_network_leaves_no_junction_to_choose_at(recorded_runs):
     for a, b in zip(route[:-1], route[1:], strict=True):
         assert sub.successors(a) == [b] and b in net.successors(a) and len(net.successors(a)) > 1
     assert len(ts) == len(ps) and np.all(np.diff(ts) > 0)
+
+
+def test_a_replay_that_fails_gives_nan_and_says_why(tmp_path):
+    res = run_job(ReplayJob("recorded", seed=0, run_dir=str(tmp_path / "missing"), sigma_a=1.0))
+    assert all(math.isnan(v) for k, v in res.items() if k != "error") and len(res) == 8
+    assert "missing" in res["error"]
+    with pytest.raises(ValueError, match="single_road, town_paper"):
+        from simulator.reproduce.road_replay import _run_job
+
+        _run_job(ReplayJob("somewhere", seed=0))
+
+
+def test_the_single_road_car_drives_like_the_papers():
+    from simulator.reproduce.road_replay import single_road_case
+
+    case = single_road_case(seed=3, duration=150.0)
+    assert 0.2 < case.accel_rms <= 1.0  # |a| <= 1 m/s² by construction, stops included in the RMS
+    assert [len(s) for s in case.scans] == [len(case.truth)] * 2

@@ -133,15 +133,13 @@ REPLAY_CASES = (
 )
 
 
-def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
-            idx: list[int]) -> tuple[Table, Finding, dict[str, dict[str, np.ndarray]]]:
+def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]], idx: list[int]) -> tuple[Table, Finding]:
     """Estimation-only experiments of :mod:`simulator.reproduce.road_replay` over the EKF + NMPC campaign's runs:
-    the table, the finding on the paper's conditions, and per case the per-run fused errors of each estimator."""
+    the table and the finding on the paper's conditions."""
     from simulator.reproduce.road_replay import ESTIMATORS, ReplayJob, car_accel_rms, run_job
 
     dirs = [str(ctx.out_dir / "campaigns" / "ekf_nmpc" / reports["ekf_nmpc"][i].run_dir) for i in idx]
     sigma_a = round(float(np.mean([car_accel_rms(d) for d in dirs])), 2)
-    n_single = len(idx)
     seeds = [ctx.seed * 100_003 + i for i in idx]  # by run index: a resumed report draws the same noise
     jobs = [ReplayJob("single_road", seed=s, duration=40.0 if ctx.quick else 150.0) for s in seeds]
     for case in ("town_paper", "town_paper_route"):  # the same radar noise in both: paired
@@ -151,13 +149,12 @@ def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
     failed = "; ".join(f"{j.case} {Path(j.run_dir).name if j.run_dir else j.seed}: {r['error']}"
                        for j, r in zip(jobs, res, strict=True) if "error" in r)
     by_case: dict[str, dict[str, np.ndarray]] = {}
-    n = len(dirs)
-    chunks = {"single_road": res[:n_single], "town_paper": res[n_single:n_single + n],
-              "town_paper_route": res[n_single + n:n_single + 2 * n], "recorded": res[n_single + 2 * n:]}
+    n = len(dirs)  # jobs per case, in the order they were made
+    chunks = dict(zip(("single_road", "town_paper", "town_paper_route", "recorded"),
+                      (res[k * n:(k + 1) * n] for k in range(4)), strict=True))
     for case, _ in REPLAY_CASES:
-        base, suffix = (case.split("@") + [""])[:2]
-        key = (lambda k: f"{k}@{suffix}") if suffix else (lambda k: k)
-        by_case[case] = {k: np.array([r[key(k)] for r in chunks[base]]) for k in ESTIMATORS}
+        base, _, suffix = case.partition("@")
+        by_case[case] = {k: np.array([r[f"{k}@{suffix}" if suffix else k] for r in chunks[base]]) for k in ESTIMATORS}
     rows = []
     for case, label in REPLAY_CASES:
         c = by_case[case]
@@ -197,7 +194,7 @@ def _replay(ctx: ReproContext, reports: dict[str, dict[int, RunReport]],
             "the runs' town traffic seen from 500 m: "
             + ", ".join(f"{k.upper()} {_change(by_case['town_paper'][k], by_case['town_paper']['ekf'])}"
                         for k in ESTIMATORS[1:]) + " (table below)")
-    return table, finding, by_case
+    return table, finding
 
 
 def _change(con: np.ndarray, ref: np.ndarray) -> str:
@@ -330,7 +327,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
                rows=tuple((n, mean_ci(v).text(2), rtf.text() if n == "NMPC + EKF" else "") for n, v in solver.items()))
 
     t_split, split = _error_split(ctx, reports, idx)
-    t_replay, replay_finding, _ = _replay(ctx, reports, idx)
+    t_replay, replay_finding = _replay(ctx, reports, idx)
     findings = []
     ekf_split = split.get("EKF fused", {})
     for name in ("MAEKF fused, road", "ECUKF fused, road"):

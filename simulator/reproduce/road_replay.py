@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -74,7 +74,6 @@ class ReplayCase:
     estimator: Callable[[str, int, dict], Any]
     fusion: Callable[[int], Any]
     accel_rms: float = float("nan")
-    meta: dict = field(default_factory=dict)
 
 
 # ----------------------------------------------------------------------------------------------- synthetic traffic
@@ -295,7 +294,7 @@ def recorded_case(run_dir: str | Path) -> ReplayCase:
         return TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
 
     return ReplayCase(network=network, times=times, scans=scans, truth=_car_truth(run_dir, ticks[0]), estimator=make,
-                      fusion=fusion, accel_rms=car_accel_rms(run_dir), meta={"run_dir": str(run_dir)})
+                      fusion=fusion, accel_rms=car_accel_rms(run_dir))
 
 
 # -------------------------------------------------------------------------------------------------------- replay

@@ -6,7 +6,7 @@ range and azimuth (δr = 2 m, δθ = 0.05 rad) and runs its own extended informa
 sends its measurement information along its route; the base station adds the packets that arrive (Bernoulli with the
 route probability β) to its own prediction. Errors are means of ‖p̂ − p‖ over time and runs, as the paper reports.
 
-As a cross-check on PyBullet quadrotors, campaigns of the physics world ``relay_tracking`` run scenarios 1–3 (with and
+As a cross-check on PyBullet quadrotors, campaigns of the physics world ``relay_tracking`` run scenarios 1–4 (with and
 without the communication term, over the MST and the fixed chain), judged from their run records
 (:mod:`simulator.reproduce.paper_001_physics`).
 """
@@ -23,8 +23,8 @@ from autonomy.estimation.models import ConstantVelocity
 from autonomy.fusion.base_station import BaseStationFusion, information_contribution
 from autonomy.guidance.infoplan.closed_loop import InfoLoopConfig, InfoLoopResult, run_info_loop
 from autonomy.guidance.infoplan.config import InfoPlannerConfig
-from simulator.reproduce.paper_001_physics import (WORLD, pattern_switches, physics_cross_check,
-                                                   relay_patterns)
+from simulator.reproduce.paper_001_physics import (CHAIN4, PAPER4_A3_DIRECT, PAPER4_BETA, PAPER4_ERRORS, WORLD,
+                                                   pattern_switches, physics_cross_check, relay_patterns)
 from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
 
 __all__ = ["reproduce"]
@@ -60,6 +60,8 @@ VARIANTS = {"A": {}, "B": {"routing": "none"}, "own": {"objective": "own"}, "cha
 lost); own: the paper's literal per-UAV objective; chain: the fixed relay chain of section 5.2."""
 
 N_SWEEP = (2, 4, 6, 8, 10)
+PAPER4_TRACE = (40.7112, 13.0033, 13.1245, 14.9834)
+"""The paper's Table 8 (scenario 4): tr(FIM) of the base and of A1–A3 (its errors and β: PAPER4_ERRORS, PAPER4_BETA)."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,7 @@ class _Out:
     beta: np.ndarray
     base_trace: float
     uav_trace: np.ndarray
+    direct_beta: np.ndarray
     flight: InfoLoopResult | None
 
 
@@ -132,7 +135,14 @@ def _one(job: _Job) -> _Out:
     res = run_info_loop(planner, loop, rng)
     b, u, bt, ut = _estimate(res, planner, rng)
     return _Out(job=job, base_err=b, uav_err=u, beta=res.beta.mean(axis=0), base_trace=bt, uav_trace=ut,
-                flight=res)
+                direct_beta=direct_beta(res, planner), flight=res)
+
+
+def direct_beta(res: InfoLoopResult, planner: InfoPlannerConfig) -> np.ndarray:
+    """(N,) time-averaged probability that each UAV's packet would reach the base over its direct link alone, along
+    the flown path (the paper's comparison for A3 in scenario 4)."""
+    d = np.linalg.norm(res.p_W[1:] - np.asarray(planner.base_p_W, dtype=float), axis=-1)
+    return np.asarray(planner.channel.delivery_probability(d), dtype=float).mean(axis=0)
 
 
 def _jobs(ctx: ReproContext) -> list[_Job]:
@@ -239,6 +249,31 @@ def reproduce(ctx: ReproContext) -> PaperReport:
                rows=(("relay chain A2 → A3 → A1 → B", "yes", f"in {100 * has_chain:.0f} % of steps (first run)"),
                      ("A2's time-averaged β", "≈ 0.5 (direct link < 0.1)", beta3.text(2))))
 
+    s4 = pick("4", "A")
+    chain4 = np.array([np.mean([CHAIN4 in r for r in relay_patterns(o.flight.parent)]) for o in s4])
+    three_hop4 = np.array([np.mean([r.count("→") >= 3 for r in relay_patterns(o.flight.parent)]) for o in s4])
+    ours8 = (mean_ci([o.base_err for o in s4]).text(), *(mean_ci([o.uav_err[i] for o in s4]).text() for i in range(3)),
+             *(mean_ci([o.beta[i] for o in s4]).text(2) for i in range(3)), mean_ci([o.base_trace for o in s4]).text(),
+             *(mean_ci([o.uav_trace[i] for o in s4]).text() for i in range(3)))
+    t8 = Table(title="Table 8 (scenario 4, three UAVs, static target): paper / ours",
+               columns=("base error (m)", "A1 error (m)", "A2 error (m)", "A3 error (m)", "A1 β", "A2 β", "A3 β",
+                        "base tr(Y)", "A1 tr(Y)", "A2 tr(Y)", "A3 tr(Y)"),
+               rows=(tuple(f"{p:.4f} / {o}" for p, o in zip((*PAPER4_ERRORS, *PAPER4_BETA, *PAPER4_TRACE), ours8,
+                                                             strict=True)),),
+               note=f"Ours: mean ± 95 % CI over {len(s4)} runs; tr(Y) as in Table 2.")
+    beta_a3, direct_a3 = (np.array([getattr(o, key)[2] for o in s4]) for key in ("beta", "direct_beta"))
+    t8b = Table(title="Scenario 4: the relay chain and what it does for A3",
+                columns=("quantity", "paper", "ours"),
+                rows=((f"steps with the chain {CHAIN4.replace('→', ' → ')}", "from t ≈ 10 s (Figs. 23–24)",
+                       mean_ci(chain4).text(2)),
+                      ("steps with some three-hop route (A3 → A2 → A1 → B or A2 → A3 → A1 → B)", "–",
+                       mean_ci(three_hop4).text(2)),
+                      ("A3's time-averaged β over the relays", f"{PAPER4_BETA[2]:g}", mean_ci(beta_a3).text(2)),
+                      ("A3's time-averaged β over its direct link alone", f"{PAPER4_A3_DIRECT:g}",
+                       mean_ci(direct_a3).text(2))),
+                note="Shares of the 1 s steps, mean over runs; the direct link's β is its delivery probability along "
+                     "A3's flown path, as if it sent straight to the base.")
+
     findings = []
     dA, dB = np.array([o.base_err for o in s1["A"]]), np.array([o.base_err for o in s1["B"]])
     d = mean_ci(dA - dB)
@@ -279,6 +314,17 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         claim="Scenario 3: A2 relays through A3 and A1 (A2 → A3 → A1 → B) with β ≈ 0.5",
         verdict="reproduced" if has_chain > 0.3 and 0.3 <= beta3.mean <= 0.7 else "not reproduced",
         why=f"chain present in {100 * has_chain:.0f} % of steps of the first run; A2's mean β {beta3.text(2)}"))
+    gain4 = mean_ci(beta_a3 - direct_a3)
+    findings.append(Finding(
+        claim=f"Scenario 4: the UAVs build the chain A3 → A2 → A1 → B, which lifts A3's β from {PAPER4_A3_DIRECT:g} "
+              f"(direct) to {PAPER4_BETA[2]:g}",
+        verdict="reproduced" if np.mean(chain4) > 0.3 and gain4.mean > 0 and (gain4.half is None or
+                                                                            gain4.mean - gain4.half > 0)
+        else "not reproduced",
+        why=f"the chain in {mean_ci(chain4).text(2)} of the steps (rule, as scenario 3's: more than 30 %; some "
+            f"three-hop route in {mean_ci(three_hop4).text(2)}, A2 and A3 taking turns at the far end); A3's β "
+            f"{mean_ci(beta_a3).text(2)} against {mean_ci(direct_a3).text(2)} over its direct link (paired gain "
+            f"{gain4.text(2)})"))
     means = [np.mean(s5[n]) for n in ns]
     mono = all(a > b for a, b in zip(means, means[1:], strict=False))
     findings.append(Finding(
@@ -299,7 +345,7 @@ the information they deliver to the base B over the minimum spanning tree of lin
 packets arrive with the route probability β. Estimation on the flown paths as in the module docstring. Target at
 {TARGET_SPEED:g} m/s. {"Quick mode: 10 steps, N ∈ {2, 3} in scenario 5." if ctx.quick else "100 steps per run."}
 """ + phys_setup,
-        tables=(t2, t4, t3, t5, *phys_tables), figures=tuple(_figures(ctx, outs)), findings=tuple(findings),
+        tables=(t2, t4, t3, t8, t8b, t5, *phys_tables), figures=tuple(_figures(ctx, outs)), findings=tuple(findings),
         deviations=(
             f"Target speed {TARGET_SPEED:g} m/s (not given by the paper).",
             "The planner uses the log-det (D-optimal) criterion of the base's predicted information and the team "
@@ -308,6 +354,6 @@ packets arrive with the route probability β. Estimation on the flown paths as i
             f"Scenario 5 uses N ∈ {N_SWEEP} and {ctx.runs} runs per N (the paper: 2–10, 100 runs).",
             f"Physics cross-check: the world `{WORLD}` is the paper scaled in length by 0.2 for quadrotor speeds; "
             "quadrotors, 3-D geometry, a physics car and track starts from radar fixes (its header lists every "
-            "deviation). Scenarios 4 and 5 are not run on it (4 is a static variant like 2; 5's random teams of up to "
-            "ten quadrotors are costly); the kinematic loop covers them.",
+            "deviation). Scenario 5 is not run on it (its random teams of up to "
+            "ten quadrotors are costly); the kinematic loop covers it.",
         ))

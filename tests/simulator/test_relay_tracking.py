@@ -9,6 +9,7 @@ from scipy import stats
 from autonomy.guidance.infoplan.information import radar_information
 from simulator.api import run
 from simulator.factories import build_guidance
+from simulator.reproduce.paper_001_physics import direct_beta
 from worlds.loader import load_world
 
 DURATION = 30.0
@@ -99,6 +100,25 @@ def test_the_far_uav_relays_through_the_near_one_when_that_route_is_better(scena
     assert ro["parent"][row1][0] == -1 and ro["beta"][row1][0] == pytest.approx(pr(p[0], base), rel=1e-9)
     # the planner keeps the relay: uav1 holds near the base and uav2 sends through it (measured: every step)
     assert scenario1.metrics["base_station"]["uavs"]["uav1"]["relay_steps"] >= 0.8 * DURATION
+
+
+def test_direct_link_probability_along_the_flown_path(scenario1):
+    """The reproduction's 'direct link' β (paper 001, scenario 4): for a UAV that always sends straight to the base it
+    is its recorded route β; for the relayed one it is the fading of its own distance to the base."""
+    ro, ut = scenario1.stream("routing"), scenario1.stream("uav_truth")
+    direct = direct_beta(scenario1.record, 2)
+    base = np.asarray(load_world("relay_tracking").world.comms.base_station)
+    for k in (0, 1):
+        mine = ro["uav"] == k
+        if np.all(ro["parent"][mine] == -1):  # measured: uav1 sends straight to the base at every step
+            # the record's 5 Hz truth is interpolated to the routing times, where the radio used the live state
+            assert direct[k] == pytest.approx(ro["beta"][mine].mean(), rel=2e-3)
+        t = ro["t"][mine]
+        u = ut["uav"] == k
+        d = np.linalg.norm(np.c_[[np.interp(t, ut["t"][u], ut[c][u]) for c in "xyz"]].T - base, axis=1)
+        assert direct[k] == pytest.approx(np.mean(np.exp(-(d / FADING) ** 3)), rel=1e-9)
+    assert np.all(ro["parent"][ro["uav"] == 0] == -1)
+    assert direct[1] < ro["beta"][ro["uav"] == 1].mean()  # the relay is why uav2's route beats its own link
 
 
 def test_teammates_plans_start_from_the_state_they_come_with(scenario1):

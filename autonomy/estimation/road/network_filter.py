@@ -7,11 +7,15 @@ One :class:`RoadNetworkFilter` holds
 - a set of **road hypotheses**, each a road-constrained filter (MAEKF or ECUKF) on a path of segments with a weight
   :math:`w_i`.
 
-Per measurement time, each hypothesis is updated and reweighted by the likelihood of the sensor measurement and by
-the probability that its car drives with its (directed) road,
-:math:`w_i \\propto w_i\\, \\mathcal N(\\nu_i; 0, S_i)\\, \\Phi(v_{t,i} / \\sigma_{v_t,i})` (the last factor once per
-time stamp). Structure changes (the paper's future work; a variable-structure multiple-model filter without Markov
-mixing, since the hypotheses differ by geometry, not by dynamics):
+Per measurement, each hypothesis is reweighted by the likelihood of the sensor measurement,
+:math:`w_i \\propto w_i\\, \\mathcal N(\\nu_i; 0, S_i)`, and its weight carries once the probability that its car
+drives with its (directed) road, :math:`\\Phi(z_i)` with :math:`z_i = v_{t,i} / \\sigma_{v_t,i}` from its current
+estimate: the mass of its Gaussian on the road's side of :math:`v_t = 0`, which is the evidence of the one-way
+constraint. Per time stamp the weight is multiplied by :math:`\\Phi(z_i) / \\Phi(z_i^{-})`, the new value over the one
+it already carries, so the same velocity evidence is not counted again at every scan.
+
+Structure changes (the paper's future work; a variable-structure multiple-model filter without Markov mixing, since
+the hypotheses differ by geometry, not by dynamics):
 
 1. **spawn**: when a hypothesis is within ``spawn_distance`` of the end of its road, it is replaced by one child per
    successor road (:meth:`RoadNetwork.successors`), path = this road + that successor, weight split evenly;
@@ -63,6 +67,8 @@ class RoadHypothesis:
     filter: RoadConstrainedFilter
     log_w: float
     spawned: bool = False
+    log_direction: float = 0.0
+    """``log Φ(z)`` the weight carries (module docstring): the direction evidence already counted."""
 
     @property
     def road_id(self) -> str:
@@ -180,7 +186,9 @@ class RoadNetworkFilter(Filter):
                 ll = h.filter.update(measurement, model).log_likelihood
                 h.log_w += ll if np.isfinite(ll) else -1e3
                 if new_time:
-                    h.log_w += self._direction_log_prob(h.filter)
+                    lp = self._direction_log_prob(h.filter)
+                    h.log_w += lp - h.log_direction
+                    h.log_direction = lp
             self._normalise()
             self._spawn()
             self._turn_around()
@@ -222,7 +230,7 @@ class RoadNetworkFilter(Filter):
             approx = self.roadmap.approximation(twin)
             p = f.x[self._ip]
             g = self._new_filter(approx.segments, approx.locate(p), f.x, f.P, f.t, f._constrained_t)
-            out.append(RoadHypothesis(g, h.log_w))
+            out.append(RoadHypothesis(g, h.log_w, log_direction=h.log_direction))
         self.hypotheses = out
 
     # ------------------------------------------------------------------ structure
@@ -296,7 +304,7 @@ class RoadNetworkFilter(Filter):
                 segs = own + self.roadmap.approximation(rid).segments
                 f = self._new_filter(segs, cur.index - first, h.filter.x, h.filter.P, h.filter.t,
                                      h.filter._constrained_t)
-                out.append(RoadHypothesis(f, h.log_w - math.log(len(succ))))
+                out.append(RoadHypothesis(f, h.log_w - math.log(len(succ)), log_direction=h.log_direction))
         self.hypotheses = out
 
     def _merge(self) -> None:
@@ -319,6 +327,9 @@ class RoadNetworkFilter(Filter):
             keep = g[int(np.argmax(w))]
             keep.filter.set_state(x, 0.5 * (P + P.T))
             keep.log_w = top + math.log(w.sum())
+            # the direction evidence the merged weight carries: Σ w_i over Σ w_i / Φ(z_i)
+            keep.log_direction = -math.log(float(sum(wi * math.exp(-h.log_direction) for wi, h in zip(wn, g,
+                                                                                                      strict=True))))
             keep.spawned = any(h.spawned for h in g) and keep.spawned
             out.append(keep)
         self.hypotheses = out
@@ -385,12 +396,12 @@ class RoadNetworkFilter(Filter):
             offset, sigma = self.roadmap.lane(c.road_id)
             lat_var = float(n @ P_pos @ n) + sigma * sigma
             sig_vt = math.sqrt(max(float(t @ Pv @ t), 1e-12))
-            log_w = -0.5 * (c.lateral - offset) ** 2 / lat_var - 0.5 * math.log(lat_var) \
-                + math.log(max(float(ndtr(float(v @ t) / sig_vt)), 1e-300))
+            log_dir = math.log(max(float(ndtr(float(v @ t) / sig_vt)), 1e-300))
+            log_w = -0.5 * (c.lateral - offset) ** 2 / lat_var - 0.5 * math.log(lat_var) + log_dir
             approx = self.roadmap.approximation(c.road_id)
             f = self._new_filter(approx.segments, approx.locate(p), x, P, self.unconstrained.t)
             f.constrain()
-            hyps.append(RoadHypothesis(f, log_w))
+            hyps.append(RoadHypothesis(f, log_w, log_direction=log_dir))
         if not hyps:
             return
         self.hypotheses = hyps

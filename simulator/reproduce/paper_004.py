@@ -22,6 +22,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -88,60 +89,63 @@ def _at(runs: list[_Run], what: str, step: int) -> np.ndarray:
     return np.array(out)
 
 
-def _figure(ctx: ReproContext, runs: dict[str, list[_Run]]) -> Figure:
+def _area_plot(ctx: ReproContext, name: str, title: str, draw: Callable[[Any], None],
+               paper_marks: tuple[str, str] = ("bs", "r^")) -> None:
+    """A normalised-area plot like the paper's Fig. 6: ``draw(ax)`` adds the curves, the paper's two figures are
+    marked (full missions only), and the PNG is written to ``ctx.out_dir / name``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(9, 4.8), dpi=100)
-    for control, ls in (("mpc", "-"), ("random", ":")):
-        for what, color, label in (("area_Xbar", "tab:blue", "φ(X̄)/φ(X0)"), ("area_X", "tab:red", "φ(X)/φ(X0)")):
-            a = np.array([getattr(r.result, what).mean(axis=1) for r in runs[control]])
-            k = np.arange(1, a.shape[1] + 1)
-            ax.plot(k, a.mean(axis=0), ls, color=color, lw=1.4, label=f"{label}, {LABELS[control]}")
-            if control == "mpc" and len(a) > 1:
-                ax.fill_between(k, np.percentile(a, 10, axis=0), np.percentile(a, 90, axis=0), color=color,
-                                alpha=0.15, lw=0)
+    draw(ax)
     if not ctx.quick:
-        ax.plot([300], [0.0], "bs", ms=8, label="paper: φ(X̄) ≈ 0 by step 300")
-        ax.plot([400], [0.035], "r^", ms=8, label="paper: φ(X) = 0.035 at step 400")
+        ax.plot([300], [0.0], paper_marks[0], ms=8, label="paper: φ(X̄) ≈ 0 by step 300")
+        ax.plot([400], [0.035], paper_marks[1], ms=8, label="paper: φ(X) = 0.035 at step 400")
     ax.set_xlabel("step (1 s)")
     ax.set_ylabel("normalised area")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title(f"Set areas, team mean over {len(runs['mpc'])} runs (band: 10–90 % of the MPC runs)")
+    ax.set_title(title)
     fig.tight_layout()
-    fig.savefig(ctx.out_dir / "areas.png")
+    fig.savefig(ctx.out_dir / name)
     plt.close(fig)
+
+
+def _team_mean(runs: list[_Run], what: str) -> np.ndarray:
+    """(runs, steps) team-mean normalised area of ``X`` or ``Xbar``."""
+    return np.array([getattr(r.result, what).mean(axis=1) for r in runs])
+
+
+def _figure(ctx: ReproContext, runs: dict[str, list[_Run]]) -> Figure:
+    def draw(ax: Any) -> None:
+        for control, ls in (("mpc", "-"), ("random", ":")):
+            for what, color, label in (("area_Xbar", "tab:blue", "φ(X̄)/φ(X0)"), ("area_X", "tab:red", "φ(X)/φ(X0)")):
+                a = _team_mean(runs[control], what)
+                k = np.arange(1, a.shape[1] + 1)
+                ax.plot(k, a.mean(axis=0), ls, color=color, lw=1.4, label=f"{label}, {LABELS[control]}")
+                if control == "mpc" and len(a) > 1:
+                    ax.fill_between(k, np.percentile(a, 10, axis=0), np.percentile(a, 90, axis=0), color=color,
+                                    alpha=0.15, lw=0)
+
+    _area_plot(ctx, "areas.png", f"Set areas, team mean over {len(runs['mpc'])} runs (band: 10–90 % of the MPC runs)",
+               draw)
     return Figure(path="areas.png", caption="Normalised areas of X and X̄ over time (the paper's Fig. 6)")
 
 
 def _opening_figure(ctx: ReproContext, runs: dict[str, list[_Run]], labels: dict[str, str]) -> Figure:
-    import matplotlib
+    def draw(ax: Any) -> None:
+        for (name, label), color in zip(labels.items(), ("tab:blue", "tab:orange", "tab:green"), strict=False):
+            for what, ls, sym in (("area_Xbar", "-", "φ(X̄)"), ("area_X", ":", "φ(X)")):
+                a = _team_mean(runs[name], what)
+                ax.plot(np.arange(1, a.shape[1] + 1), a.mean(axis=0), ls, color=color, lw=1.4,
+                        label=f"{sym}/φ(X0), {label}")
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(9, 4.8), dpi=100)
-    for (name, label), color in zip(labels.items(), ("tab:blue", "tab:orange", "tab:green"), strict=False):
-        for what, ls, sym in (("area_Xbar", "-", "φ(X̄)"), ("area_X", ":", "φ(X)")):
-            a = np.array([getattr(r.result, what).mean(axis=1) for r in runs[name]])
-            ax.plot(np.arange(1, a.shape[1] + 1), a.mean(axis=0), ls, color=color, lw=1.4,
-                    label=f"{sym}/φ(X0), {label}")
-    if not ctx.quick:
-        ax.plot([300], [0.0], "ks", ms=8, label="paper: φ(X̄) ≈ 0 by step 300")
-        ax.plot([400], [0.035], "k^", ms=8, label="paper: φ(X) = 0.035 at step 400")
-    ax.set_xlabel("step (1 s)")
-    ax.set_ylabel("normalised area")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title(f"Search MPC, team mean over {len(runs['mpc'])} runs, by reading of the sensor's opening angle")
-    fig.tight_layout()
-    fig.savefig(ctx.out_dir / "areas_by_opening.png")
-    plt.close(fig)
+    _area_plot(ctx, "areas_by_opening.png",
+               f"Search MPC, team mean over {len(runs['mpc'])} runs, by reading of the sensor's opening angle", draw,
+               paper_marks=("ks", "k^"))
     return Figure(path="areas_by_opening.png",
                   caption="Normalised areas of X̄ (solid) and X (dotted) under the three readings of the opening angle")
 

@@ -135,10 +135,10 @@ def _one(job: _Job) -> _Out:
     res = run_info_loop(planner, loop, rng)
     b, u, bt, ut = _estimate(res, planner, rng)
     return _Out(job=job, base_err=b, uav_err=u, beta=res.beta.mean(axis=0), base_trace=bt, uav_trace=ut,
-                direct_beta=direct_beta(res, planner), flight=res)
+                direct_beta=_direct_beta(res, planner), flight=res)
 
 
-def direct_beta(res: InfoLoopResult, planner: InfoPlannerConfig) -> np.ndarray:
+def _direct_beta(res: InfoLoopResult, planner: InfoPlannerConfig) -> np.ndarray:
     """(N,) time-averaged probability that each UAV's packet would reach the base over its direct link alone, along
     the flown path (the paper's comparison for A3 in scenario 4)."""
     d = np.linalg.norm(res.p_W[1:] - np.asarray(planner.base_p_W, dtype=float), axis=-1)

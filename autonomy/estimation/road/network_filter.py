@@ -328,8 +328,8 @@ class RoadNetworkFilter(Filter):
             keep.filter.set_state(x, 0.5 * (P + P.T))
             keep.log_w = top + math.log(w.sum())
             # the direction evidence the merged weight carries: Σ w_i over Σ w_i / Φ(z_i)
-            keep.log_direction = -math.log(float(sum(wi * math.exp(-h.log_direction) for wi, h in zip(wn, g,
-                                                                                                      strict=True))))
+            without = sum(wi * math.exp(-h.log_direction) for wi, h in zip(wn, g, strict=True))
+            keep.log_direction = -math.log(float(without))
             keep.spawned = any(h.spawned for h in g) and keep.spawned
             out.append(keep)
         self.hypotheses = out

@@ -15,14 +15,19 @@ __all__ = ["RunRecord", "SetSnapshot", "load_run", "load_search_sets", "load_str
 
 
 def load_stream(folder: Path) -> dict[str, np.ndarray]:
-    """Concatenate the chunks of one stream folder into one array per column (empty dict if none)."""
-    parts = sorted(Path(folder).glob("part-*.npz"))
+    """Concatenate the chunks of one stream folder into one array per column (empty dict if none): ``part-*.npy``
+    (a structured array each) and the ``part-*.npz`` of older records (an array per column)."""
+    parts = sorted((*Path(folder).glob("part-*.npy"), *Path(folder).glob("part-*.npz")), key=lambda p: p.stem)
     if not parts:
         return {}
     chunks = []
     for p in parts:
-        with np.load(p, allow_pickle=False) as z:
-            chunks.append({k: z[k] for k in z.files})
+        if p.suffix == ".npy":
+            a = np.load(p, allow_pickle=False)
+            chunks.append({k: a[k] for k in a.dtype.names})
+        else:
+            with np.load(p, allow_pickle=False) as z:
+                chunks.append({k: z[k] for k in z.files})
     return {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}
 
 

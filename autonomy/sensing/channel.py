@@ -368,9 +368,22 @@ class Channel:
         Returns whether each addressee's copy survived (it arrives ``latency_s`` later).
         """
         targets = [msg.receiver] if msg.receiver is not None else [n for n in positions if n != msg.sender]
-        nodes = (msg.sender, *targets)
-        P = self.link_matrix(nodes, positions, tick)
-        return {r: self._transmit(msg, (msg.sender, r), [P[0, k + 1]], tick) for k, r in enumerate(targets)}
+        P = self._links_from(msg.sender, targets, positions, tick)
+        return {r: self._transmit(msg, (msg.sender, r), [P[k]], tick) for k, r in enumerate(targets)}
+
+    def _links_from(self, sender: str, targets: Sequence[str], positions: Mapping[str, np.ndarray],
+                    tick: int) -> np.ndarray:
+        """(len(targets),) delivery probabilities from ``sender`` to each target at ``tick``: the sender's row of
+        :meth:`link_matrix`, without the links among the targets that a direct send does not use (with three UAVs
+        broadcasting, their line-of-sight rays were a third of those cast)."""
+        nodes = (sender, *targets)
+        pts = np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
+        P = self.config.delivery_probability(np.linalg.norm(pts[:1] - pts[1:], axis=1))
+        if self.config.block_by_buildings and len(targets):
+            clear = np.asarray(self.scene.line_of_sight(np.repeat(pts[:1], len(targets), axis=0), pts[1:]), dtype=bool)
+            P[~clear] = 0.0
+        P[~scheduled_links(nodes, self.config.links, self._outages, tick)[0, 1:]] = 0.0
+        return P
 
     def send_routed(self, msg: Message, tree: RoutingTree, tick: int) -> bool:
         """Send ``msg`` from its sender to the tree's root along the tree path (erasure per hop)."""

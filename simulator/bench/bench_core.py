@@ -62,9 +62,10 @@ def bench_scene_build() -> list[BenchRecord]:
     return records
 
 
-def _world_rtf(name: str, duration: float | None = None, overrides: tuple[str, ...] = ()) -> tuple[float, float]:
-    """(real-time factor of the whole run, of its loop alone: simulated time over the wall time after setup) of a run
-    of the shipped world ``name`` (its own duration unless ``duration``)."""
+def _world_rtf(name: str, duration: float | None = None, overrides: tuple[str, ...] = ()) -> tuple[float, float, float]:
+    """(real-time factor of the whole run, of its loop alone: simulated time over the wall time after setup, and the
+    bound its autonomy alone sets: simulated time over the wall time of the agents' phase) of a run of the shipped
+    world ``name`` (its own duration unless ``duration``)."""
     from simulator.api import run
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -72,27 +73,31 @@ def _world_rtf(name: str, duration: float | None = None, overrides: tuple[str, .
         if result.status != "completed":
             raise RuntimeError(f"{name} did not complete: {result.error}")
         m = result.metrics
-        loop = m["wall_time_s"] - m["wall_time_breakdown_s"]["setup"]
-        return float(m["real_time_factor"]), float(m["sim_time_s"] / loop)
+        phases = m["wall_time_breakdown_s"]
+        loop = m["wall_time_s"] - phases["setup"]
+        autonomy = phases.get("autonomy", 0.0)
+        return (float(m["real_time_factor"]), float(m["sim_time_s"] / loop),
+                float(m["sim_time_s"] / autonomy) if autonomy > 0 else math.inf)
 
 
-def _median_rtf(name: str, repeats: int = 3, **kw) -> tuple[float, float]:
+def _median_rtf(name: str, repeats: int = 3, **kw) -> tuple[float, ...]:
     runs = [_world_rtf(name, **kw) for _ in range(repeats)]
-    return statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
+    return tuple(statistics.median(r[k] for r in runs) for k in range(len(runs[0])))
 
 
 def _paired_rtf(name: str, overrides: tuple[str, ...], variant: tuple[str, ...],
-                repeats: int = 3) -> tuple[tuple[float, float], tuple[float, float], float]:
+                repeats: int = 3) -> tuple[tuple[float, ...], tuple[float, ...], float]:
     """Runs of the shipped world ``name`` with ``overrides`` alternating with runs that add the ``variant``
-    overrides (``repeats`` of each, so both see the same load of a shared machine): the medians (real-time factor,
-    loop real-time factor) of each, and the median over the pairs of the variant's real-time factor over the
+    overrides (``repeats`` of each, so both see the same load of a shared machine): the medians of each figure of
+    :func:`_world_rtf` for each, and the median over the pairs of the variant's real-time factor over the
     reference's."""
     ref, var = [], []
     for _ in range(repeats):
         ref.append(_world_rtf(name, overrides=overrides))
         var.append(_world_rtf(name, overrides=overrides + variant))
     med = statistics.median
-    return ((med(r[0] for r in ref), med(r[1] for r in ref)), (med(r[0] for r in var), med(r[1] for r in var)),
+    return (tuple(med(r[k] for r in ref) for k in range(len(ref[0]))),
+            tuple(med(r[k] for r in var) for k in range(len(var[0]))),
             med(v[0] / r[0] for r, v in zip(ref, var, strict=True)))
 
 
@@ -116,19 +121,20 @@ def _kinematic_cars(world: str) -> tuple[str, ...]:
     return tuple(f"ground_vehicles[{i}].dynamics=kinematic" for i in range(n))
 
 
-def _world_records(prefix: str, target: float, physics: tuple[float, float], kinematic: tuple[float, float],
+def _world_records(prefix: str, target: float, physics: tuple[float, ...], kinematic: tuple[float, ...],
                    speedup: float) -> list[BenchRecord]:
     """The records of one world run with its physics cars and with kinematic cars (see :func:`bench_world_rtf`)."""
     return [BenchRecord(name=f"{prefix}_rtf", value=physics[0], unit="x", target=target, better="higher"),
             BenchRecord(name=f"{prefix}_loop_rtf", value=physics[1], unit="x", better="higher"),
+            BenchRecord(name=f"{prefix}_autonomy_bound_rtf", value=physics[2], unit="x", better="higher"),
             BenchRecord(name=f"{prefix}_kinematic_rtf", value=kinematic[0], unit="x", target=target, better="higher"),
             BenchRecord(name=f"{prefix}_kinematic_loop_rtf", value=kinematic[1], unit="x", better="higher"),
             BenchRecord(name=f"{prefix}_kinematic_speedup", value=speedup, unit="x", better="higher")]
 
 
 @benchmark("world_rtf", produces=tuple(f"{w}_{k}" for w in ("road_standoff", "helsinki_chase")
-                                       for k in ("rtf", "loop_rtf", "kinematic_rtf", "kinematic_loop_rtf",
-                                                 "kinematic_speedup")) + ("demo_rtf",))
+                                       for k in ("rtf", "loop_rtf", "autonomy_bound_rtf", "kinematic_rtf",
+                                                 "kinematic_loop_rtf", "kinematic_speedup")) + ("demo_rtf",))
 def bench_world_rtf() -> list[BenchRecord]:
     """Closed-loop real-time factors of shipped worlds run for their own duration (median of 3 runs each): the demo
     world (2 quadrotors, 1 car, radars, EKF, vector-field guidance; 60 s), paper 002's ``road_standoff`` (2
@@ -136,13 +142,15 @@ def bench_world_rtf() -> list[BenchRecord]:
     without its cameras (3 quadrotors, radars, ECUKF on the city's roads, covariance intersection, NMPC among the
     buildings, a building-blocked radio; 120 s; target >= 10x). ``*_loop_rtf``: the same runs without their setup
     (world, solvers and scene: ≈ 1-1.5 s per run with warm caches; ``wall_time_breakdown_s`` of the metrics says
-    where the rest goes).
+    where the rest goes). ``*_autonomy_bound_rtf``: the simulated time over the wall time of the agents' phase alone
+    (estimation, fusion, guidance, the radio messages they send): the real-time factor the world could reach if its
+    physics, vehicles, sensors and records cost nothing; a target above it cannot be met without a cheaper autonomy.
 
     ``*_kinematic_*``: the same two worlds with every ground vehicle kinematic (``ground_vehicles[i].dynamics:
     kinematic``: a kinematic bicycle carrying a box instead of the multibody car), each run alternating with a run
     of the shipped world so both see the same load; ``*_kinematic_speedup`` is the median over those pairs of the
     kinematic run's real-time factor over the physics run's."""
-    demo, _ = _median_rtf("demo")
+    demo = _median_rtf("demo")[0]
     out = [BenchRecord(name="demo_rtf", value=demo, unit="x", better="higher")]
     for world, target, overrides in (("road_standoff", 30.0, ()),
                                      ("helsinki_chase", 10.0, _radar_only("helsinki_chase"))):

@@ -51,12 +51,17 @@ class MeanCI:
 
 
 def mean_ci(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -> MeanCI:
-    """Mean and Student-t confidence half-width of the finite entries of ``values``."""
+    """Mean and Student-t confidence half-width of the finite entries of ``values``.
+
+    Equal values (a deterministic quantity over seeds) have a half-width of exactly 0: their floating-point mean can
+    differ from them in the last bit, and the interval would otherwise print as ``± 8.4e-17``."""
     x = np.asarray(values, dtype=float).ravel()
     x = x[np.isfinite(x)]
     if x.size == 0:
         return MeanCI(mean=float("nan"), half=None, n=0)
     half = None
+    if x.size >= 2 and np.all(x == x[0]):
+        return MeanCI(mean=float(x[0]), half=0.0, n=int(x.size))
     if x.size >= 2:
         half = float(stats.t.ppf(0.5 + confidence / 2.0, df=x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
     return MeanCI(mean=float(x.mean()), half=half, n=int(x.size))

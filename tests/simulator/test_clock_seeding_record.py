@@ -45,7 +45,7 @@ def test_record_roundtrip_partial_and_truncated(tmp_path):
     # simulate a process killed mid-write: a torn last line in events.jsonl and a stray temporary chunk
     with open(tmp_path / "events.jsonl", "a") as f:
         f.write('{"type": "torn')
-    (tmp_path / "timeseries" / "truth" / ".part-00001.tmp.npz").write_bytes(b"garbage")
+    (tmp_path / "timeseries" / "truth" / ".part-00001.tmp.npy").write_bytes(b"garbage")
     loaded = load_run(tmp_path)
     assert loaded.status == "unknown"
     assert [e["type"] for e in loaded.events] == ["collision"]
@@ -53,6 +53,27 @@ def test_record_roundtrip_partial_and_truncated(tmp_path):
     assert loaded.metrics == {"sim_time_s": 0.2}
     with pytest.raises(KeyError, match="no stream"):
         loaded.stream("nope")
+
+
+def test_record_chunks_keep_dtypes_shapes_and_order(tmp_path):
+    rec = RunRecorder(tmp_path)
+    for k in range(12):  # more than one chunk, road names of growing width, a (2, 2) column
+        rec.append_rows("s", {"tick": [k], "road": ["r" * (k + 1)], "P": np.full((1, 2, 2), float(k))})
+        rec.flush()
+    s = load_run(tmp_path).stream("s")
+    assert s["tick"].tolist() == list(range(12)) and s["tick"].dtype.kind == "i"
+    assert s["road"].tolist() == ["r" * (k + 1) for k in range(12)]
+    assert s["P"].shape == (12, 2, 2) and s["P"][11].tolist() == [[11.0, 11.0], [11.0, 11.0]]
+
+
+def test_record_of_the_older_npz_layout_loads(tmp_path):
+    # records written before the chunks became one structured array: one .npz member per column
+    folder = tmp_path / "timeseries" / "truth"
+    folder.mkdir(parents=True)
+    np.savez(folder / "part-00000.npz", tick=np.array([1, 2]), x=np.array([1.0, 2.0]))
+    np.savez(folder / "part-00001.npz", tick=np.array([3]), x=np.array([3.0]))
+    s = load_run(tmp_path).stream("truth")
+    assert s["tick"].tolist() == [1, 2, 3] and s["x"].tolist() == [1.0, 2.0, 3.0]
 
 
 def test_record_rejects_inconsistent_columns(tmp_path):

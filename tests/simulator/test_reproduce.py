@@ -2,6 +2,7 @@
 
 import re
 
+import numpy as np
 import pytest
 
 from simulator.cli import main
@@ -17,6 +18,13 @@ def test_mean_ci_is_students_t_interval():
     assert ci.mean == pytest.approx(2.5) and ci.half == pytest.approx(3.182446 * 1.290994 / 2, rel=1e-6)
     assert mean_ci([5.0]) == MeanCI(mean=5.0, half=None, n=1)
     assert mean_ci([float("nan"), 1.0, 3.0]).n == 2
+
+
+def test_mean_ci_of_equal_values_is_exact():
+    # ten copies of 0.95: numpy's mean is off in the last bit and the sample deviation came out as ~1e-16
+    assert np.mean([0.95] * 10) != 0.95
+    ci = mean_ci([0.95] * 10)
+    assert ci == MeanCI(mean=0.95, half=0.0, n=10) and ci.text() == "0.95 ± 0"
 
 
 def test_report_parts_validate():

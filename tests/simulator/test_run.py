@@ -102,7 +102,7 @@ def test_killed_process_leaves_loadable_record(tmp_path):
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:
-            if (out / "metrics.json").exists() and list((out / "timeseries").glob("*/part-00001.npz")):
+            if (out / "metrics.json").exists() and list((out / "timeseries").glob("*/part-00001.npy")):
                 break
             time.sleep(0.2)
         else:

@@ -55,11 +55,17 @@ def ackermann_angles(delta: float, wheelbase: float, track: float) -> tuple[floa
 
 def wheel_speeds(v: float, delta: float, params: CarParams) -> np.ndarray:
     """(4,) rolling angular speeds (rad/s) of the FL, FR, RL, RR wheels for centre-of-mass speed ``v`` (m/s)."""
+    return np.array(_wheel_speed_list(v, delta, params))
+
+
+def _wheel_speed_list(v: float, delta: float, params: CarParams) -> list[float]:
+    """:func:`wheel_speeds` as a list of floats (the same products, without the array)."""
     tau = math.tan(delta)
     v_r = v * math.cos(math.atan(0.5 * tau))
     q = 0.5 * params.track * tau / params.wheelbase
     rl, rr = 1.0 - q, 1.0 + q
-    return v_r / params.wheel_radius * np.array([math.hypot(rl, tau), math.hypot(rr, tau), rl, rr])
+    k = v_r / params.wheel_radius
+    return [k * math.hypot(rl, tau), k * math.hypot(rr, tau), k * rl, k * rr]
 
 
 class CarBody:
@@ -120,8 +126,8 @@ class CarBody:
         for j in STEER_JOINTS:
             p.changeDynamics(self.body_id, j, jointLowerLimit=-par.max_steer - 0.2, jointUpperLimit=par.max_steer + 0.2,
                              jointDamping=0.0, physicsClientId=c)
-        self._drive = np.array([0.0, 0.0, 0.5 * par.max_drive_torque, 0.5 * par.max_drive_torque])
-        self._brake = np.full(4, 0.25 * par.max_brake_torque)
+        self._drive = [0.0, 0.0, 0.5 * par.max_drive_torque, 0.5 * par.max_drive_torque]  # wheel motor forces
+        self._brake = [0.25 * par.max_brake_torque] * 4
         self._steer_force = [par.steer_torque] * 2
         self._sent: tuple[float, float, bool] | None = None
         self.apply(0.0, 0.0, braking=True)
@@ -141,8 +147,8 @@ class CarBody:
                                         forces=self._steer_force, physicsClientId=c)
         if steer_changed or abs(speed - last[1]) > _SPEED_TOL or braking != last[2]:
             p.setJointMotorControlArray(self.body_id, WHEEL_JOINTS, p.VELOCITY_CONTROL,
-                                        targetVelocities=wheel_speeds(speed, steer, par).tolist(),
-                                        forces=(self._brake if braking else self._drive).tolist(), physicsClientId=c)
+                                        targetVelocities=_wheel_speed_list(speed, steer, par),
+                                        forces=self._brake if braking else self._drive, physicsClientId=c)
             self._sent = (steer, speed, braking)
 
     def read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

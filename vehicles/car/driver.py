@@ -68,6 +68,7 @@ class Driver:
         self._ticks_per_second = physics_hz
         self._events: list[dict] = []
         self._proj: PathProjection | None = None
+        self._cap: tuple[LanePath, float, np.ndarray] | None = None  # (path, cruise fraction, caps): see _caps
         self.command = DriveCommand(accel=0.0, steer=0.0, hold=False, tick=0)
         first = network.roads[route.first_road]
         if route.start_s > first.length:
@@ -89,6 +90,8 @@ class Driver:
         self.path = LanePath(roads, [self.route.lane] * n, s_start, cfg.path_ds, cfg.corner_length)
         self._ends_route = n == len(plan.road_ids) and plan.finite
         self._proj = None
+        self._junction_s: list[float] = self.path.junction_s.tolist()
+        self._v_curve = curve_speed(self.path.kappa, cfg.lateral_accel_max)
 
     def _maybe_rebuild(self, p_xy: np.ndarray) -> None:
         """Move the path forward once the car is on a later road's own lane section, or extend a short path."""
@@ -150,9 +153,9 @@ class Driver:
     # ---------------------------------------------------------------- stops
     def _next_stop(self, s_car: float) -> tuple[float, int] | None:
         """(path arc length of the next stop line (m), planned road index or -1 for the route end)."""
-        for k, s_j in enumerate(self.path.junction_s):
+        for k, s_j in enumerate(self._junction_s):
             if self.plan.stop_flags[k] and s_j > s_car - 3 * self.config.stop_window:
-                return float(s_j), k
+                return s_j, k
         if self._ends_route:
             return max(self.path.length - 0.5 * self.params.length - 1.0, 0.0), -1
         return None
@@ -211,29 +214,43 @@ class Driver:
             self._next_cruise_tick = tick + max(1, int(gap * self._ticks_per_second))
 
     def _steer(self, p_xy: np.ndarray, yaw: float, v: float, yaw_rate: float | None) -> float:
-        cfg, L = self.config, self.params.wheelbase
-        p_f = p_xy + 0.5 * L * np.array([math.cos(yaw), math.sin(yaw)])
-        pf = self.path.project(p_f, self._proj.index, window=80)
+        cfg, par = self.config, self.params
+        half_l = 0.5 * par.wheelbase
+        pf = self.path.project_xy(float(p_xy[0]) + half_l * math.cos(yaw), float(p_xy[1]) + half_l * math.sin(yaw),
+                                  self._proj.index, window=80)  # the front axle
         delta = _wrap(pf.heading - yaw) - math.atan2(cfg.stanley_gain * pf.lateral, v + cfg.stanley_softening)
         if yaw_rate is not None and cfg.yaw_damping > 0:
             delta -= cfg.yaw_damping * (yaw_rate - v * float(self.path.kappa[pf.index]))
-        return float(np.clip(delta, -self.params.max_steer, self.params.max_steer))
+        return min(max(delta, -par.max_steer), par.max_steer)
+
+    def _caps(self) -> np.ndarray:
+        """(N,) speed cap of every path point (m/s): curve speed, cruise fraction of the speed limit, top speed.
+
+        Kept until the path or the cruise fraction changes.
+        """
+        path, fraction = self.path, self.cruise_fraction
+        if self._cap is None or self._cap[0] is not path or self._cap[1] != fraction:
+            cap = np.minimum(self._v_curve, np.minimum(fraction * path.speed_limit, self.params.max_speed))
+            self._cap = (path, fraction, cap)
+        return self._cap[2]
 
     def _accel(self, proj: PathProjection, v: float, stop: tuple[float, int] | None,
                leader: LeaderInfo | None) -> float:
         cfg, path = self.config, self.path
         reach = v * v / (2 * self.decel_plan) + cfg.lookahead_margin
-        i1 = int(np.searchsorted(path.s, proj.s + reach, side="right"))
-        ahead = slice(proj.index, min(max(i1, proj.index + 2), len(path.s)))  # path points from the car's segment on
-        d = path.s[ahead] - proj.s
+        i0 = proj.index
+        i1 = min(max(path.search(proj.s + reach), i0 + 2), len(path.s))  # path points from the car's segment on
+        m = i1 - i0
+        with_stop = stop is not None and stop[0] - proj.s <= reach
+        d, cap = np.empty(m + with_stop), np.empty(m + with_stop)
+        np.subtract(path.s[i0:i1], proj.s, out=d[:m])
         d[0] = 0.0  # the car's own position
-        cap = np.minimum(curve_speed(path.kappa[ahead], cfg.lateral_accel_max),
-                         np.minimum(self.cruise_fraction * path.speed_limit[ahead], self.params.max_speed))
-        if stop is not None and stop[0] - proj.s <= reach:
-            d, cap = np.append(d, stop[0] - proj.s), np.append(cap, 0.0)
+        cap[:m] = self._caps()[i0:i1]
+        if with_stop:
+            d[m], cap[m] = stop[0] - proj.s, 0.0
         a, _ = envelope_accel(v, d, cap, gain=cfg.speed_gain, decel_plan=self.decel_plan,
                               min_distance=max(2.0, 2 * v / cfg.rate_hz))
         if leader is not None:
             a = min(a, idm_plus_accel(v, leader.speed, leader.gap, s0=cfg.idm_s0, time_headway=cfg.idm_time_headway,
                                       accel=self.accel_max, decel=self.decel_plan))
-        return float(np.clip(a, -self.decel_max, self.accel_max))
+        return float(min(max(a, -self.decel_max), self.accel_max))

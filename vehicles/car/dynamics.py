@@ -65,14 +65,14 @@ class PhysicsDynamics:
         self.body_id = self.body.body_id
         self.v_ref = 0.0
         self.steer_ref = 0.0
+        self._steer_step = params.max_steer_rate * self.dt  # largest steering reference change per step (rad)
 
     def actuate(self, command: DriveCommand) -> None:
-        par, dt = self.params, self.dt
         if command.hold:
             self.v_ref = 0.0
         else:
-            self.v_ref = min(max(self.v_ref + command.accel * dt, 0.0), par.max_speed)
-        step = par.max_steer_rate * dt
+            self.v_ref = min(max(self.v_ref + command.accel * self.dt, 0.0), self.params.max_speed)
+        step = self._steer_step
         self.steer_ref += min(max(command.steer - self.steer_ref, -step), step)
         self.body.apply(self.steer_ref, self.v_ref, braking=command.hold or command.accel < 0.0)
 

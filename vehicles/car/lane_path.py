@@ -11,6 +11,7 @@ Everything a driver needs (projection, heading, curvature, speed limit, junction
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -49,6 +50,11 @@ class PathProjection:
 
 def _wrap(a: float | np.ndarray) -> float | np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _wrap_float(a: float) -> float:
+    """:func:`_wrap` of one float in float math (the same operations, so the same result)."""
+    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 @njit(cache=True)
@@ -176,6 +182,12 @@ class LanePath:
         self.junction_s = np.maximum(js - np.where(np.asarray(smooth, dtype=bool), corner_length, 0.0), 0.0)
         self._t = np.diff(self.xy, axis=0) / np.maximum(seg, 1e-12)[:, None]
         self._seg = seg
+        # the same numbers as Python lists: the per-call scalar reads of project / locate / search are cheaper on them
+        self._s_list: list[float] = self.s.tolist()
+        self._seg_list: list[float] = seg.tolist()
+        self._heading_list: list[float] = self.heading.tolist()
+        self._road_index_list: list[int] = self.road_index.tolist()
+        self._road_s_list: list[float] = self.road_s.tolist()
 
     @staticmethod
     def _smooth_join(a: RoadLike, b: RoadLike, off_a: float, off_b: float) -> bool:
@@ -192,21 +204,31 @@ class LanePath:
 
     def project(self, p_xy: np.ndarray, hint: int | None = None, window: int = 60) -> PathProjection:
         """Closest point of the path to ``p_xy`` (m), searching segments near ``hint`` (all when None)."""
-        n = len(self._seg)
+        return self.project_xy(float(p_xy[0]), float(p_xy[1]), hint, window)
+
+    def project_xy(self, px: float, py: float, hint: int | None = None, window: int = 60) -> PathProjection:
+        """:meth:`project` of the point (``px``, ``py``) (m) given as two floats."""
+        n = len(self._seg_list)
         lo, hi = (0, n) if hint is None else (max(0, hint - window), min(n, hint + window))
-        k, u, lateral = _closest_segment(self.xy, self._t, self._seg, lo, hi, float(p_xy[0]), float(p_xy[1]))
-        frac = u / max(self._seg[k], 1e-12)
-        heading = float(self.heading[k] + frac * _wrap(self.heading[k + 1] - self.heading[k]))
-        return PathProjection(s=float(self.s[k] + u), lateral=lateral, heading=heading, index=k)
+        k, u, lateral = _closest_segment(self.xy, self._t, self._seg, lo, hi, px, py)
+        h = self._heading_list
+        frac = u / max(self._seg_list[k], 1e-12)
+        heading = h[k] + frac * _wrap_float(h[k + 1] - h[k])
+        return PathProjection(s=self._s_list[k] + u, lateral=lateral, heading=heading, index=k)
+
+    def search(self, s: float) -> int:
+        """Number of samples at arc length <= ``s`` (m): ``np.searchsorted(self.s, s, side="right")``."""
+        return bisect_right(self._s_list, s)
 
     def locate(self, s: float) -> tuple[int, float]:
         """(road index, arc length on that road's centre-line (m)) of path arc length ``s``."""
-        s = min(max(float(s), 0.0), float(self.s[-1]))
-        k = min(max(int(np.searchsorted(self.s, s, side="right")) - 1, 0), len(self.s) - 2)
-        frac = (s - self.s[k]) / max(self._seg[k], 1e-12)
-        if self.road_index[k] != self.road_index[k + 1]:
-            return int(self.road_index[k]), float(self.road_s[k])
-        return int(self.road_index[k]), float(self.road_s[k] + frac * (self.road_s[k + 1] - self.road_s[k]))
+        s_list, road_index, road_s = self._s_list, self._road_index_list, self._road_s_list
+        s = min(max(float(s), 0.0), s_list[-1])
+        k = min(max(bisect_right(s_list, s) - 1, 0), len(s_list) - 2)
+        frac = (s - s_list[k]) / max(self._seg_list[k], 1e-12)
+        if road_index[k] != road_index[k + 1]:
+            return road_index[k], road_s[k]
+        return road_index[k], road_s[k] + frac * (road_s[k + 1] - road_s[k])
 
     def s_of_road(self, road_index: int, road_s: float) -> float:
         """Path arc length of arc length ``road_s`` on road ``road_index`` (m), clipped to the path."""

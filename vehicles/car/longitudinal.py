@@ -50,14 +50,15 @@ def envelope_accel(v: float, d: np.ndarray, v_cap: np.ndarray, *, gain: float, d
     """
     d = np.maximum(np.asarray(d, dtype=float), 0.0)
     v_cap = np.asarray(v_cap, dtype=float)
-    v_curve = np.sqrt(v_cap ** 2 + 2.0 * decel_plan * d)  # braking curve of each cap, evaluated here
-    v_target = float(np.min(v_curve))
+    v_cap2 = v_cap ** 2
+    v_curve = np.sqrt(v_cap2 + 2.0 * decel_plan * d)  # braking curve of each cap, evaluated here
+    v_target = float(v_curve.min())
     a = gain * (v_target - v)
     # exact braking only for caps whose braking curve the car has (nearly) reached: a car creeping far below the
     # curve must be allowed to speed up, not held at a standstill by a tiny braking demand
     far = (d >= min_distance) & (v_cap < v) & (v >= v_curve - _BRAKE_CURVE_MARGIN)
-    if np.any(far):
-        a = min(a, float(np.min((v_cap[far] ** 2 - v * v) / (2.0 * d[far]))))
+    if far.any():
+        a = min(a, float(((v_cap2[far] - v * v) / (2.0 * d[far])).min()))
     return a, v_target
 
 

@@ -349,6 +349,13 @@ def test_ci_two_inputs_beat_the_bounded_scalar_search_and_a_dense_grid(criterion
     assert interior >= 30 and ends >= 15
 
 
+def _fused_random_pair(rng, max_log10_cond, criterion):
+    """((x_1, P_1), (x_2, P_2), their CI) for a random pair (:func:`_random_pair`) and random states."""
+    P1, P2 = _random_pair(rng, max_log10_cond)
+    x1, x2 = rng.normal(size=len(P1)), rng.normal(size=len(P1))
+    return (x1, P1), (x2, P2), covariance_intersection([x1, x2], [P1, P2], criterion)
+
+
 @pytest.mark.parametrize("criterion", ["trace", "det"])
 def test_ci_two_inputs_are_stationary_and_use_the_ci_formulas(criterion):
     """Well-conditioned pairs: P = (ω Y_1 + (1 − ω) Y_2)⁻¹ and x = P (ω Y_1 x_1 + (1 − ω) Y_2 x_2) to 1e-10, and the
@@ -356,10 +363,7 @@ def test_ci_two_inputs_are_stationary_and_use_the_ci_formulas(criterion):
     1e-6 search tolerance leaves ≈ 1e-6) and points outwards at an end point."""
     rng = np.random.default_rng(12)
     for _ in range(200):
-        P1, P2 = _random_pair(rng, 3.0)
-        n = len(P1)
-        x1, x2 = rng.normal(size=n), rng.normal(size=n)
-        f = covariance_intersection([x1, x2], [P1, P2], criterion)
+        (x1, P1), (x2, P2), f = _fused_random_pair(rng, 3.0, criterion)
         w = f.weights[0]
         Y1, Y2 = np.linalg.inv(P1), np.linalg.inv(P2)
         P = np.linalg.inv(w * Y1 + (1.0 - w) * Y2)
@@ -402,10 +406,8 @@ def test_ci_two_loewner_ordered_inputs_keep_the_smaller_one(criterion):
 def test_ci_two_inputs_order_asymmetry_and_near_singular_inputs(criterion):
     rng = np.random.default_rng(14)
     for _ in range(50):
-        P1, P2 = _random_pair(rng, 4.0)
+        (x1, P1), (x2, P2), f = _fused_random_pair(rng, 4.0, criterion)
         n = len(P1)
-        x1, x2 = rng.normal(size=n), rng.normal(size=n)
-        f = covariance_intersection([x1, x2], [P1, P2], criterion)
         # order of the inputs: weights swap, the same fused estimate
         g = covariance_intersection([x2, x1], [P2, P1], criterion)
         np.testing.assert_allclose(g.weights, f.weights[::-1], atol=1e-9)

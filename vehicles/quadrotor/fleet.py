@@ -15,7 +15,11 @@ installed version has, and ``tests/vehicles/test_quad_physics.py`` checks that a
 Cost per tick: each stage of the cascade is one compiled loop over the UAVs (numba, cached on disk after the first
 run), so the numerical work costs about a microsecond per stage whatever N; what grows with N is PyBullet's own work,
 four calls per UAV (read pose, read velocity, apply force, apply torque) and the step. ``skytrack bench`` reports
-the real-time factor next to the floor of bare PyBullet bodies.
+the real-time factor next to the floor of bare PyBullet bodies. At a few UAVs, calling a compiled loop costs more
+than its arithmetic (about 0.3 us per call plus 0.1 us per array argument), so the stages that run at every tick are
+called through two fused loops, :func:`_actuate` (rotor lag and total wrench) and :func:`_inner_loops` (attitude,
+rate and mixer), which run the stages' own compiled loops in the same order on the same numbers, with the per-UAV
+constants packed into one array.
 """
 
 from __future__ import annotations
@@ -25,16 +29,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pybullet as p
+from numba import njit
 
 from vehicles.quadrotor.aero import DownwashConfig, downwash_force_W, ground_effect_factor
 from vehicles.quadrotor.command_shaping import CommandShaper
 from vehicles.quadrotor.commands import FlightCommand
-from vehicles.quadrotor.inner_loop import AttitudeController, RateController
-from vehicles.quadrotor.mixer import MotorMixer
+from vehicles.quadrotor.inner_loop import AttitudeController, RateController, _attitude_rates, _rate_torques
+from vehicles.quadrotor.mixer import MotorMixer, _allocate
 from vehicles.quadrotor.outer_loop import ThrustVectorController, VelocityController
 from vehicles.quadrotor.params import GRAVITY, QuadrotorParams
 from vehicles.quadrotor.rotation import rotation_and_body_rates, yaw_to_quat
-from vehicles.quadrotor.rotors import RotorBank
+from vehicles.quadrotor.rotors import RotorBank, _lag_step
 from vehicles.quadrotor.setpoints import AttitudeSetpoint
 from vehicles.quadrotor.stack import AirframeStack
 from vehicles.quadrotor.state import FleetState
@@ -92,6 +97,44 @@ class FleetOptions:
                              f"{self.ground_effect_min_height_ratio!r}")
         if not np.isfinite(self.ground_z):
             raise ValueError(f"FleetOptions.ground_z must be finite, got {self.ground_z!r}")
+
+
+# Columns of the per-UAV constants of the per-tick stages (``QuadrotorFleet._k``), copied from the stages.
+_K_RP, _K_YAW, _MAX_RATE = 0, 1, 2          # attitude: roll/pitch and yaw gains, rate limits (3)
+_JK, _J = 5, 8                              # rate: J K_w (3), J (3)
+_F_MIN, _F_MAX, _K_F = 11, 12, 13           # mixer: rotor thrust range, thrust coefficient
+_ALPHA, _W_MAX = 14, 15                     # rotors: lag factor per step, top speed
+_C_LIN, _C_QUAD = 16, 19                    # body drag coefficients (3 + 3)
+_N_K = 22
+# Columns of the inner loops' outputs (``QuadrotorFleet._w``).
+_W_RATE, _W_THRUST, _W_TORQUE, _W_F = 0, 3, 4, 7
+_N_W = 11
+
+
+@njit(cache=True)
+def _actuate(omega: np.ndarray, omega_cmd: np.ndarray, k: np.ndarray, f_nom: np.ndarray, f: np.ndarray,
+             R_WB: np.ndarray, alloc: np.ndarray, v_rel_W: np.ndarray, F_W: np.ndarray, tau_W: np.ndarray,
+             total: np.ndarray) -> None:
+    """Out of ground effect, one step of the rotors (:meth:`RotorBank.step`: ``omega`` and ``f_nom`` in place),
+    ``f = f_nom``, and the total wrench (:func:`total_wrench_W` into ``F_W``, ``tau_W``, ``total``); ``k`` holds the
+    per-UAV constants (columns ``_ALPHA``, ...)."""
+    _lag_step(omega, omega_cmd, k[:, _ALPHA], k[:, _W_MAX], k[:, _K_F], f_nom)
+    f[:] = f_nom
+    total_wrench_W(R_WB, f, f_nom, alloc, v_rel_W, k[:, _C_LIN:_C_LIN + 3], k[:, _C_QUAD:_C_QUAD + 3], F_W, tau_W,
+                   total)
+
+
+@njit(cache=True)
+def _inner_loops(R_WB: np.ndarray, omega_B: np.ndarray, F_W: np.ndarray, yaw: np.ndarray, yaw_rate: np.ndarray,
+                 k: np.ndarray, alloc_inv: np.ndarray, w: np.ndarray, omega_cmd: np.ndarray) -> None:
+    """The inner loops of :class:`AttitudeController`, :class:`RateController` and :class:`MotorMixer` on the attitude
+    set-point ``(F_W, yaw, yaw_rate)``: body-rate set-points, collective thrusts, body torques and rotor thrusts into
+    the columns of ``w`` (``_W_RATE``, ...), rotor speed commands into ``omega_cmd`` (N, 4)."""
+    rate, thrust = w[:, _W_RATE:_W_RATE + 3], w[:, _W_THRUST]
+    torque, f = w[:, _W_TORQUE:_W_TORQUE + 3], w[:, _W_F:_W_F + 4]
+    _attitude_rates(R_WB, F_W, yaw, yaw_rate, k[:, _K_RP], k[:, _K_YAW], k[:, _MAX_RATE:_MAX_RATE + 3], rate, thrust)
+    _rate_torques(rate, omega_B, k[:, _JK:_JK + 3], k[:, _J:_J + 3], torque)
+    _allocate(thrust, torque, alloc_inv, k[:, _F_MIN], k[:, _F_MAX], k[:, _K_F], f, omega_cmd)
 
 
 class QuadrotorFleet:
@@ -155,6 +198,15 @@ class QuadrotorFleet:
         self._att_ctrl = AttitudeController(s)
         self._rate_ctrl = RateController(s)
         self._mixer = MotorMixer(s)
+        # The constants of the per-tick stages, copied into one array, and the inner loops' outputs (_inner_loops).
+        k = self._k = np.empty((n, _N_K))
+        k[:, _K_RP], k[:, _K_YAW] = self._att_ctrl._k_rp, self._att_ctrl._k_yaw
+        k[:, _MAX_RATE:_MAX_RATE + 3] = self._att_ctrl._max_rate
+        k[:, _JK:_JK + 3], k[:, _J:_J + 3] = self._rate_ctrl._JK, self._rate_ctrl._J
+        k[:, _F_MIN], k[:, _F_MAX], k[:, _K_F] = self._mixer._f_min, self._mixer._f_max, self._mixer._k_f
+        k[:, _ALPHA], k[:, _W_MAX] = self._rotors._alpha, self._rotors._w_max
+        k[:, _C_LIN:_C_LIN + 3], k[:, _C_QUAD:_C_QUAD + 3] = s.drag_linear, s.drag_quadratic
+        self._w = np.zeros((n, _N_W))
 
         self._tick = 0
         self._events: list[dict] = []
@@ -169,6 +221,7 @@ class QuadrotorFleet:
         F0[:, 2] = s.mass * GRAVITY
         self._att_sp = AttitudeSetpoint(F_W=F0, yaw=yaw0.copy(), yaw_rate=np.zeros(n))
         self._tilt_saturated = np.zeros(n, dtype=bool)
+        self._any_tilt_saturated = False
         self.force_W = np.zeros((n, 3))
         """(N, 3) total external force applied at the last :meth:`apply_actuation`, world frame (N)."""
         self.torque_W = np.zeros((n, 3))
@@ -210,21 +263,23 @@ class QuadrotorFleet:
         over the step (PyBullet clears external forces after each ``stepSimulation``).
         """
         st, s, opt = self._state, self._s, self.options
-        f_nom = self._rotors.step()
-        f = self._thrust
-        if opt.ground_effect:
-            rotor_z = st.p_W[:, 2:3] + np.matmul(self._rotor_r, st.R_WB[:, 2, :, None])[:, :, 0] - opt.ground_z
-            np.multiply(f_nom, ground_effect_factor(rotor_z, s.rotor_radius[:, None],
-                                                    opt.ground_effect_min_height_ratio), out=f)
-        else:
-            f[:] = f_nom
+        F_W, tau_W = self.force_W, self.torque_W
         v_rel = st.v_W
         if self._wind is not None:
             self.wind_W = self._wind.step()
             v_rel = v_rel - self.wind_W
-        F_W, tau_W = self.force_W, self.torque_W
-        total_wrench_W(st.R_WB, f, f_nom, s.alloc, v_rel, s.drag_linear, s.drag_quadratic, F_W, tau_W,
-                       self._total_thrust)
+        if opt.ground_effect:
+            f_nom = self._rotors.step()
+            f = self._thrust
+            rotor_z = st.p_W[:, 2:3] + np.matmul(self._rotor_r, st.R_WB[:, 2, :, None])[:, :, 0] - opt.ground_z
+            np.multiply(f_nom, ground_effect_factor(rotor_z, s.rotor_radius[:, None],
+                                                    opt.ground_effect_min_height_ratio), out=f)
+            total_wrench_W(st.R_WB, f, f_nom, s.alloc, v_rel, s.drag_linear, s.drag_quadratic, F_W, tau_W,
+                           self._total_thrust)
+        else:
+            r = self._rotors
+            _actuate(r.omega, r.omega_cmd, self._k, r._thrust, self._thrust, st.R_WB, s.alloc, v_rel, F_W, tau_W,
+                     self._total_thrust)
         if opt.downwash:
             self.downwash_W = downwash_force_W(st.p_W, self._total_thrust, self._wake_radius, self._disk_area,
                                                opt.downwash_model)
@@ -244,8 +299,9 @@ class QuadrotorFleet:
             self._vel_ctrl.freeze = self._tv_ctrl.saturated
             self._att_sp = self._tv_ctrl.update(self._vel_ctrl.update(vsp, st), st)
             self._record_tilt_events(tick)
-        wrench = self._rate_ctrl.update(self._att_ctrl.update(self._att_sp, st), st)
-        self._rotors.omega_cmd = self._mixer.update(wrench, st).omega
+        sp = self._att_sp
+        _inner_loops(st.R_WB, st.omega_B, sp.F_W, sp.yaw, sp.yaw_rate, self._k, self._s.alloc_inv, self._w,
+                     self._rotors.omega_cmd)
 
     def set_command(self, i: int, cmd: FlightCommand) -> None:
         """Give UAV ``i`` a new command; envelope saturations are recorded as events (see :meth:`pop_events`)."""
@@ -285,10 +341,12 @@ class QuadrotorFleet:
 
     def _record_tilt_events(self, tick: int) -> None:
         sat = self._tv_ctrl.saturated
-        if not (sat.any() or self._tilt_saturated.any()):
+        any_sat = bool(sat.any())
+        if not (any_sat or self._any_tilt_saturated):
             return
         for i in np.flatnonzero(sat & ~self._tilt_saturated).tolist():
             self._events.append({"type": "command_saturated", "uav": i, "tick": tick, "field": "tilt",
                                  "requested": float(self._tv_ctrl.requested_tilt[i]),
                                  "applied": float(self._tv_ctrl.tilt_limit[i]), "limit": "tilt_max"})
         self._tilt_saturated = sat.copy()
+        self._any_tilt_saturated = any_sat

@@ -18,14 +18,9 @@ _I2 = np.array([2, 0, 1])
 
 
 @njit(cache=True)
-def quat_to_rotmat(q_WB: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``R_WB`` (N, 3, 3) from unit quaternions (N, 4) in (x, y, z, w) order.
-
-    .. math::  R = I + 2 w [v]_\\times + 2 [v]_\\times^2, \\quad v = (x, y, z)
-    """
-    n = q_WB.shape[0]
-    R = np.empty((n, 3, 3))
-    for i in range(n):
+def _quat_to_rotmat_into(q_WB: np.ndarray, R: np.ndarray) -> None:
+    """Write the rotation matrices of the unit quaternions ``q_WB`` (N, 4), (x, y, z, w), into ``R`` (N, 3, 3)."""
+    for i in range(q_WB.shape[0]):
         x, y, z, w = q_WB[i, 0], q_WB[i, 1], q_WB[i, 2], q_WB[i, 3]
         R[i, 0, 0] = 1.0 - 2.0 * (y * y + z * z)
         R[i, 0, 1] = 2.0 * (x * y - w * z)
@@ -36,6 +31,16 @@ def quat_to_rotmat(q_WB: np.ndarray) -> np.ndarray:
         R[i, 2, 0] = 2.0 * (x * z - w * y)
         R[i, 2, 1] = 2.0 * (y * z + w * x)
         R[i, 2, 2] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@njit(cache=True)
+def quat_to_rotmat(q_WB: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``R_WB`` (N, 3, 3) from unit quaternions (N, 4) in (x, y, z, w) order.
+
+    .. math::  R = I + 2 w [v]_\\times + 2 [v]_\\times^2, \\quad v = (x, y, z)
+    """
+    R = np.empty((q_WB.shape[0], 3, 3))
+    _quat_to_rotmat_into(q_WB, R)
     return R
 
 
@@ -64,13 +69,18 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def rotate_T(R_WB: np.ndarray, v_W: np.ndarray) -> np.ndarray:
-    """``R_WB^T v_W`` row-wise: world vectors (N, 3) expressed in the body frame."""
-    n = v_W.shape[0]
-    out = np.empty((n, 3))
-    for i in range(n):
+def _rotate_T_into(R_WB: np.ndarray, v_W: np.ndarray, out: np.ndarray) -> None:
+    """Write ``R_WB^T v_W`` row-wise into ``out`` (N, 3)."""
+    for i in range(v_W.shape[0]):
         for j in range(3):
             out[i, j] = R_WB[i, 0, j] * v_W[i, 0] + R_WB[i, 1, j] * v_W[i, 1] + R_WB[i, 2, j] * v_W[i, 2]
+
+
+@njit(cache=True)
+def rotate_T(R_WB: np.ndarray, v_W: np.ndarray) -> np.ndarray:
+    """``R_WB^T v_W`` row-wise: world vectors (N, 3) expressed in the body frame."""
+    out = np.empty((v_W.shape[0], 3))
+    _rotate_T_into(R_WB, v_W, out)
     return out
 
 
@@ -78,5 +88,5 @@ def rotate_T(R_WB: np.ndarray, v_W: np.ndarray) -> np.ndarray:
 def rotation_and_body_rates(x: np.ndarray, R_WB: np.ndarray, omega_B: np.ndarray) -> None:
     """Fill ``R_WB`` (N, 3, 3) and ``omega_B`` (N, 3) from rows ``(p_W, q_WB, v_W, omega_W)`` (N, 13) of body states
     as PyBullet reports them (angular velocity in the world frame)."""
-    R_WB[:] = quat_to_rotmat(x[:, 3:7])
-    omega_B[:] = rotate_T(R_WB, x[:, 10:13])
+    _quat_to_rotmat_into(x[:, 3:7], R_WB)
+    _rotate_T_into(R_WB, x[:, 10:13], omega_B)

@@ -219,6 +219,11 @@ def scheduled_links(nodes: Sequence[str], links: Iterable[tuple[str, str]] | Non
     return up
 
 
+def _points(nodes: Sequence[str], positions: Mapping[str, np.ndarray]) -> np.ndarray:
+    """(N, 3) positions (m) of ``nodes``, in their order."""
+    return np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
+
+
 def _tree_inputs(nodes: Sequence[str], link_probability: np.ndarray, root: str) -> tuple[tuple[str, ...],
                                                                                           np.ndarray]:
     """``nodes`` as a tuple and the (N, N) link probabilities as floats, checked against each other and ``root``."""
@@ -316,16 +321,20 @@ class Channel:
     def link_matrix(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
         """(N, N) symmetric delivery probabilities between ``nodes`` at ``tick`` (diagonal 1)."""
         nodes = tuple(nodes)
-        pts = np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
-        d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
-        P = self.config.delivery_probability(d)
+        pts = _points(nodes, positions)
         iu, ju = np.triu_indices(len(nodes), k=1)
-        if self.config.block_by_buildings and iu.size:
-            clear = np.asarray(self.scene.line_of_sight(pts[iu], pts[ju]), dtype=bool)
-            P[iu[~clear], ju[~clear]] = 0.0
-            P[ju[~clear], iu[~clear]] = 0.0
+        P = np.eye(len(nodes))
+        P[iu, ju] = P[ju, iu] = self._pair_probabilities(pts[iu], pts[ju])
         P[~scheduled_links(nodes, self.config.links, self._outages, tick)] = 0.0
         np.fill_diagonal(P, 1.0)
+        return P
+
+    def _pair_probabilities(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(K,) delivery probabilities of the links from ``a[k]`` to ``b[k]`` (K, 3) m: fading, range and, with
+        ``block_by_buildings``, line of sight (the link schedule and outages are the callers')."""
+        P = self.config.delivery_probability(np.linalg.norm(a - b, axis=1))
+        if self.config.block_by_buildings and len(a):
+            P[~np.asarray(self.scene.line_of_sight(a, b), dtype=bool)] = 0.0
         return P
 
     def sample_links(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
@@ -377,11 +386,8 @@ class Channel:
         :meth:`link_matrix`, without the links among the targets that a direct send does not use (with three UAVs
         broadcasting, their line-of-sight rays were a third of those cast)."""
         nodes = (sender, *targets)
-        pts = np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
-        P = self.config.delivery_probability(np.linalg.norm(pts[:1] - pts[1:], axis=1))
-        if self.config.block_by_buildings and len(targets):
-            clear = np.asarray(self.scene.line_of_sight(np.repeat(pts[:1], len(targets), axis=0), pts[1:]), dtype=bool)
-            P[~clear] = 0.0
+        pts = _points(nodes, positions)
+        P = self._pair_probabilities(np.repeat(pts[:1], len(targets), axis=0), pts[1:])
         P[~scheduled_links(nodes, self.config.links, self._outages, tick)[0, 1:]] = 0.0
         return P
 

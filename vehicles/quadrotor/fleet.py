@@ -221,7 +221,6 @@ class QuadrotorFleet:
         F0[:, 2] = s.mass * GRAVITY
         self._att_sp = AttitudeSetpoint(F_W=F0, yaw=yaw0.copy(), yaw_rate=np.zeros(n))
         self._tilt_saturated = np.zeros(n, dtype=bool)
-        self._any_tilt_saturated = False
         self.force_W = np.zeros((n, 3))
         """(N, 3) total external force applied at the last :meth:`apply_actuation`, world frame (N)."""
         self.torque_W = np.zeros((n, 3))
@@ -341,12 +340,10 @@ class QuadrotorFleet:
 
     def _record_tilt_events(self, tick: int) -> None:
         sat = self._tv_ctrl.saturated
-        any_sat = bool(sat.any())
-        if not (any_sat or self._any_tilt_saturated):
+        if not (sat.any() or self._tilt_saturated.any()):
             return
         for i in np.flatnonzero(sat & ~self._tilt_saturated).tolist():
             self._events.append({"type": "command_saturated", "uav": i, "tick": tick, "field": "tilt",
                                  "requested": float(self._tv_ctrl.requested_tilt[i]),
                                  "applied": float(self._tv_ctrl.tilt_limit[i]), "limit": "tilt_max"})
         self._tilt_saturated = sat.copy()
-        self._any_tilt_saturated = any_sat

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 from autonomy.fusion.track_fusion import TrackFusion
-from autonomy.guidance.setpoints import Setpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.measurement import Detection
+from interfaces.setpoints import Setpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["Agent", "AgentOutput", "GuidanceLaw", "TargetEstimator"]
 

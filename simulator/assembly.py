@@ -17,13 +17,13 @@ from autonomy.fusion.base_station import InformationReporter
 from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam
 from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
-from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.camera import CAR_RGBA
 from autonomy.sensing.channel import scheduled_links
 from autonomy.sensing.measurement import Sensor
 from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
+from interfaces.setpoints import UnicycleSetpoint, VelocitySetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 from simulator.clock import Clock
 from simulator.decoys import StaticDecoys, build_decoys
 from simulator.factories import build_estimator, build_guidance, build_sensor
@@ -32,7 +32,6 @@ from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery
 from simulator.search_team import SearchTeamRun
 from simulator.seeding import RunSeeds
-from vehicles.quadrotor.commands import UnicycleCommand, VelocityCommand
 from worlds.build import build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
@@ -282,7 +281,7 @@ class Assembly:
                 result = a.agent.act(t, own, mates, *team[a.uav])
             else:
                 result = a.agent.step(t, own, mates, shared if a.agent.fusion is not None else ())
-            self.quads.set_command(a.uav, _to_command(result.setpoint))
+            self.quads.set_command(a.uav, result.setpoint)
             if self.channel is not None:  # after planning, so the plan sent starts from the state sent
                 self._broadcast_state(a.uav, t, tick)
             if self._sharing:
@@ -413,14 +412,6 @@ def _estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, use
 def _yaw(q: np.ndarray) -> float:
     x, y, z, w = q
     return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-
-
-def _to_command(sp: Any) -> Any:
-    if isinstance(sp, UnicycleSetpoint):
-        return UnicycleCommand(speed=sp.speed, heading_rate=sp.heading_rate, altitude=sp.altitude)
-    if isinstance(sp, VelocitySetpoint):
-        return VelocityCommand(v_W=sp.v_W, yaw=sp.yaw)
-    raise TypeError(f"guidance returned {type(sp).__name__}; expected UnicycleSetpoint or VelocitySetpoint")
 
 
 @dataclass

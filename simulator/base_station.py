@@ -33,9 +33,9 @@ import numpy as np
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.tracker import make_motion_model
 from autonomy.fusion.base_station import BaseStationFusion, InformationReporter
-from autonomy.guidance.types import TargetEstimate
 from autonomy.sensing.channel import Channel, RoutingTree
 from autonomy.sensing.messages import InformationMessage
+from interfaces.state import TargetEstimate
 
 __all__ = ["BASE_NODE", "BaseStation", "build_base_station", "route_parents"]
 

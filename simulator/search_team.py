@@ -11,7 +11,7 @@ team when their agents are due (they share one rate, :mod:`worlds.checks`):
    under a radio, one erasure draw per link), :func:`autonomy.fusion.set_team.fuse_team_sets`;
 3. the UAVs decide one after another in :func:`~autonomy.guidance.search.planner.decision_order` over those links,
    each seeing the plans of the linked teammates that decided before it in this step (a
-   :class:`~autonomy.guidance.types.TeammateState` with ``plan_p_W``, stamped now), as the paper's sequential MPC;
+   :class:`~interfaces.state.TeammateState` with ``plan_p_W``, stamped now), as the paper's sequential MPC;
 4. one row per UAV of the ``search`` stream: the normalised areas of ``X`` and ``X̄``, how many true targets lie in
    ``X ∪ X̄`` (the guarantee, checked against the physics truth), how many decoys lie in ``X``, the neighbours fused,
    whether the decision was safe (:class:`~autonomy.guidance.search.planner.SearchDecision`), the heading change
@@ -39,7 +39,7 @@ from autonomy.agent import AgentOutput
 from autonomy.estimation.setmem.tracker import ObservedRegion
 from autonomy.fusion.set_team import fuse_team_sets
 from autonomy.guidance.search.planner import decision_order
-from autonomy.guidance.types import TeammateState
+from interfaces.state import TeammateState
 
 __all__ = ["EMPTY_FRACTION", "SETS_FILE", "SNAPSHOT_EVERY", "SearchTeamRun"]
 

@@ -45,7 +45,7 @@ from autonomy.estimation.imm import cv_ct_imm
 from autonomy.estimation.measurements import StackedMeasurement, measurement_model
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
 from autonomy.estimation.scif import SqrtInformation, add_information
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 
 __all__ = ["SingleTargetTracker", "TrackInformation", "TrackerConfig", "make_motion_model"]
 

@@ -31,7 +31,7 @@ from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, 
 from autonomy.estimation.models import MotionModel
 from autonomy.estimation.scif import add_information
 from autonomy.estimation.tracker import SingleTargetTracker
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 
 __all__ = ["InformationContribution", "information_contribution", "sample_received", "BaseStationFusion",
            "InformationReporter"]

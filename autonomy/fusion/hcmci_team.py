@@ -21,7 +21,7 @@ from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.scif import SqrtInformation
 from autonomy.estimation.tracker import SingleTargetTracker, TrackInformation
 from autonomy.fusion.consensus import hcmci
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 
 __all__ = ["HcmciConfig", "HcmciTeam", "TeamStep", "consensus_adjacency", "fuse_team", "pair_adjacency"]
 

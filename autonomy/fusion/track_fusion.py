@@ -16,7 +16,7 @@ from typing import Literal
 import numpy as np
 
 from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 
 __all__ = ["TrackFusionConfig", "TrackFusion", "predict_estimate"]
 

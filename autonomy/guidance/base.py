@@ -1,7 +1,7 @@
 """The guidance role: one base class and the statistics every guidance law keeps.
 
 A guidance law turns the UAV's own state, the (fused) target estimate and what teammates share into a set-point
-(:mod:`autonomy.guidance.setpoints`) for the quadrotor's controllers.
+(:mod:`interfaces.setpoints`) for the quadrotor's controllers.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from autonomy.guidance.setpoints import Setpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.setpoints import Setpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["Guidance", "GuidanceStats"]
 

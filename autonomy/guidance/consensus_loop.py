@@ -28,7 +28,7 @@ from autonomy.estimation.models import Singer
 from autonomy.estimation.scif import SCIF
 from autonomy.fusion.consensus import hcmci_step, ring_adjacency, without_links
 from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["STOP_AND_GO", "ConsensusLoopConfig", "ConsensusLoopResult", "target_drive", "run_consensus_loop"]
 

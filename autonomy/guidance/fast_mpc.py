@@ -35,8 +35,8 @@ import numpy as np
 
 from autonomy.guidance.base import Guidance
 from autonomy.guidance.pdip import PdipOptions, solve_qp_pdip
-from autonomy.guidance.setpoints import UnicycleSetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.setpoints import UnicycleSetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["FastMpcConfig", "FastMpcQp", "FastMpcGuidance", "build_fast_mpc_qp", "euler_rollout"]
 

@@ -2,7 +2,7 @@
 
 The harness of the guidance tests and benchmarks (no physics engine): each step every UAV receives its own state,
 the exact target state and the teammates' states and plans shared at the start of the step (synchronous update), its
-guidance law returns a :class:`~autonomy.guidance.setpoints.UnicycleSetpoint`, and the unicycle
+guidance law returns a :class:`~interfaces.setpoints.UnicycleSetpoint`, and the unicycle
 (:mod:`autonomy.guidance.unicycle`) integrates it over one step.
 """
 
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from autonomy.guidance.base import Guidance
-from autonomy.guidance.setpoints import UnicycleSetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.unicycle import UnicycleParams, unicycle_step
+from interfaces.setpoints import UnicycleSetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["LoopConfig", "LoopResult", "run_kinematic_loop"]
 

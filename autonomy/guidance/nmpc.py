@@ -134,9 +134,9 @@ from autonomy.guidance.nmpc_problem import NX as _NX
 from autonomy.guidance.nmpc_problem import NU as _NU
 from autonomy.guidance.nmpc_problem import NmpcProblem, build_problem
 from autonomy.guidance.nmpc_stage import FatropSolver
-from autonomy.guidance.setpoints import UnicycleSetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.vector_field import VectorFieldGuidance
+from interfaces.setpoints import UnicycleSetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 from worlds.geometry import Building
 
 __all__ = ["NmpcStandoffGuidance", "NmpcStats"]

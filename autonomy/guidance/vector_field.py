@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from autonomy.guidance.base import Guidance
-from autonomy.guidance.setpoints import UnicycleSetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.setpoints import UnicycleSetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["VectorFieldConfig", "VectorFieldGuidance", "wrap_angle", "phase_errors"]
 

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from autonomy.guidance.base import Guidance
-from autonomy.guidance.setpoints import VelocitySetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.setpoints import VelocitySetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["WaypointConfig", "WaypointGuidance"]
 

@@ -13,7 +13,7 @@ import numpy as np
 from autonomy.guidance.formation.guidance import FormationConfig, formation_step
 from autonomy.guidance.infoplan.config import InfoPlannerConfig
 from autonomy.guidance.infoplan.planner import TeamInfoPlanner
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 from simulator.bench.registry import BenchRecord, benchmark, median_of, time_call
 
 _REPEATS = 15

@@ -18,9 +18,9 @@ import time
 import numpy as np
 import pybullet as p
 
+from interfaces.setpoints import UnicycleSetpoint
 from simulator.bench.registry import BenchRecord, benchmark
 from vehicles.quadrotor.airframes import load_airframe
-from vehicles.quadrotor.commands import UnicycleCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet
 
 PHYSICS_HZ = 240
@@ -55,7 +55,7 @@ def _fleet_rtf(n: int) -> tuple[float, float]:
         fleet = QuadrotorFleet(cid, [load_airframe("survey_quad")] * n, _grid(n), np.zeros(n), PHYSICS_HZ,
                                FleetOptions(), np.random.default_rng(n))
         for i in range(1, n, 2):
-            fleet.set_command(i, UnicycleCommand(speed=10.0, heading_rate=0.3, altitude=40.0))
+            fleet.set_command(i, UnicycleSetpoint(speed=10.0, heading_rate=0.3, altitude=40.0))
         ticks = int(SIM_SECONDS * PHYSICS_HZ)
 
         def loop() -> None:

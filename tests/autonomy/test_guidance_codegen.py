@@ -12,7 +12,7 @@ from autonomy.guidance import codegen
 from autonomy.guidance.codegen import BufferedCall, compiled_nlpsol
 from autonomy.guidance.nmpc import NmpcStandoffGuidance
 from autonomy.guidance.nmpc_config import NmpcConfig
-from autonomy.guidance.types import OwnState, TargetEstimate
+from interfaces.state import OwnState, TargetEstimate
 
 _QUIET = {"print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
           "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False}}

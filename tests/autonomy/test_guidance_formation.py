@@ -7,8 +7,8 @@ import pytest
 from autonomy.guidance.formation.geometry import optimal_formation
 from autonomy.guidance.formation.guidance import FormationConfig, FormationGuidance, formation_step
 from autonomy.guidance.formation.jacobi import JacobiGains, jacobi_matrix, jacobi_pd_acceleration
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.metrics.fim import bearing_fim, max_det_bearing_fim
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 EX1_SENSORS = np.array([[-10.0, 0.0], [0.0, 0.0], [0.0, 10.0]])
 EX1_TARGET = np.array([5.0, 5.0])

@@ -12,9 +12,9 @@ from autonomy.guidance.infoplan.planner import TeamInfoPlanner, arc_paths
 from autonomy.guidance.infoplan.routing import (chain_route_probabilities, link_probabilities,
                                                 mst_route_probabilities)
 from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.unicycle import UnicycleParams
 from autonomy.sensing.channel import ChannelConfig, minimum_spanning_tree_routes
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 
 def test_radar_information_closed_form():

@@ -9,7 +9,7 @@ from autonomy.guidance.nmpc import NmpcStandoffGuidance
 from autonomy.guidance.nmpc_config import NmpcConfig
 from autonomy.guidance.nmpc_problem import NU, NX
 from autonomy.guidance.nmpc_stage import StageLayout
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 from worlds.geometry import Building
 
 RD = 120.0

@@ -8,9 +8,9 @@ from hypothesis import strategies as st
 from autonomy.guidance.fast_mpc import FastMpcConfig
 from autonomy.guidance.keepout import footprint_distance, keepout_ellipse, nearby_keepouts
 from autonomy.guidance.nmpc_config import NmpcConfig
-from autonomy.guidance.setpoints import UnicycleSetpoint, VelocitySetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.vector_field import VectorFieldConfig
+from interfaces.setpoints import UnicycleSetpoint, VelocitySetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 from worlds.geometry import Building
 
 

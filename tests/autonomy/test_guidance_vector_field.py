@@ -46,7 +46,7 @@ def test_phase_keeping_two_uavs():
 
 
 def test_no_target_loiters():
-    from autonomy.guidance.types import OwnState
+    from interfaces.state import OwnState
     g = VectorFieldGuidance(VectorFieldConfig())
     sp = g.command(OwnState(t=0, p_W=[0, 0, 50], v_W=[0, 0, 0], yaw=0.0), None, [], 0.0)
     assert sp.heading_rate == pytest.approx(12.0 / 120.0)

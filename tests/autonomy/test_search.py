@@ -10,10 +10,10 @@ from autonomy.guidance.search.guidance import SetMembershipSearchGuidance, teamm
 from autonomy.guidance.search.mission import MissionConfig, SearchMission, line_of_sight_graph
 from autonomy.guidance.search.planner import SearchConfig, SearchPlanner, decision_order, rollout
 from autonomy.guidance.search.regions import PrismViewRegion
-from autonomy.guidance.setpoints import VelocitySetpoint
-from autonomy.guidance.types import OwnState, TeammateState
 from autonomy.sensing.box_sensor import BoxSensor, BoxSensorConfig
 from autonomy.sensing.scene import SensorPose
+from interfaces.setpoints import VelocitySetpoint
+from interfaces.state import OwnState, TeammateState
 from worlds.geometry import Building
 
 AREA = shapely.box(0.0, 0.0, 500.0, 500.0)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig, predict_estimate
-from autonomy.guidance.types import TargetEstimate
+from interfaces.state import TargetEstimate
 
 
 def est(t, p, v, var_p, var_v):

@@ -28,7 +28,7 @@ def test_errors_are_observed_at_every_agent_step_and_nowhere_else():
     it looks at even ticks only), and still scores every agent step."""
     import numpy as np
 
-    from autonomy.guidance.types import TargetEstimate
+    from interfaces.state import TargetEstimate
 
     truth = SimpleNamespace(p_W=np.array([[10.0, 0.0, 0.5]]), v_W=np.zeros((1, 3)))
     asm = SimpleNamespace(recorder=SimpleNamespace(event_counts={}), target_index=0, uav_ids=["a", "b"],

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from interfaces.setpoints import PositionSetpoint, UnicycleSetpoint, VelocitySetpoint
 from vehicles.quadrotor.airframes import load_airframe
 from vehicles.quadrotor.command_shaping import TURN_ACCEL_FRACTION, sqrt_speed
-from vehicles.quadrotor.commands import PositionCommand, UnicycleCommand, VelocityCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet
 from vehicles.quadrotor.params import GRAVITY
 from vehicles.quadrotor.wind import WindConfig
@@ -24,12 +24,13 @@ def fleet_of(cid: int, names: list[str], rng, options: FleetOptions | None = Non
 @pytest.mark.parametrize(
     ("make", "match"),
     [
-        (lambda: PositionCommand(p_W=[0.0, 1.0]), "PositionCommand.p_W"),
-        (lambda: PositionCommand(p_W=[0.0, 1.0, float("nan")]), "PositionCommand.p_W"),
-        (lambda: PositionCommand(p_W=[0.0, 1.0, 2.0], yaw=float("inf")), "PositionCommand.yaw"),
-        (lambda: VelocityCommand(v_W=[1.0, 2.0, 3.0, 4.0]), "VelocityCommand.v_W"),
-        (lambda: UnicycleCommand(speed=-1.0, heading_rate=0.0, altitude=10.0), "UnicycleCommand.speed"),
-        (lambda: UnicycleCommand(speed=1.0, heading_rate=float("nan"), altitude=10.0), "UnicycleCommand.heading_rate"),
+        (lambda: PositionSetpoint(p_W=[0.0, 1.0]), "PositionSetpoint.p_W"),
+        (lambda: PositionSetpoint(p_W=[0.0, 1.0, float("nan")]), "PositionSetpoint.p_W"),
+        (lambda: PositionSetpoint(p_W=[0.0, 1.0, 2.0], yaw=float("inf")), "PositionSetpoint.yaw"),
+        (lambda: VelocitySetpoint(v_W=[1.0, 2.0, 3.0, 4.0]), "VelocitySetpoint.v_W"),
+        (lambda: UnicycleSetpoint(speed=-1.0, heading_rate=0.0, altitude=10.0), "UnicycleSetpoint.speed"),
+        (lambda: UnicycleSetpoint(speed=1.0, heading_rate=float("nan"), altitude=10.0),
+         "UnicycleSetpoint.heading_rate"),
     ],
 )
 def test_invalid_commands_rejected(make, match) -> None:
@@ -38,7 +39,7 @@ def test_invalid_commands_rejected(make, match) -> None:
 
 
 def test_commands_are_immutable() -> None:
-    cmd = VelocityCommand(v_W=[1.0, 2.0, 3.0])
+    cmd = VelocitySetpoint(v_W=[1.0, 2.0, 3.0])
     with pytest.raises(ValueError):
         cmd.v_W[0] = 5.0
 
@@ -46,7 +47,7 @@ def test_commands_are_immutable() -> None:
 def test_velocity_saturation_events(bullet_client, rng, run_fleet) -> None:
     a = load_airframe("survey_quad")
     fleet = fleet_of(bullet_client, ["survey_quad"], rng)
-    fleet.set_command(0, VelocityCommand(v_W=[15.0, 20.0, -8.0]))
+    fleet.set_command(0, VelocitySetpoint(v_W=[15.0, 20.0, -8.0]))
     events = fleet.pop_events()
     assert fleet.pop_events() == []  # popping clears
     by_field = {e["field"]: e for e in events}
@@ -61,7 +62,7 @@ def test_velocity_saturation_events(bullet_client, rng, run_fleet) -> None:
 def test_unicycle_saturation_events(bullet_client, rng) -> None:
     a = load_airframe("survey_quad")
     fleet = fleet_of(bullet_client, ["survey_quad"], rng)
-    fleet.set_command(0, UnicycleCommand(speed=25.0, heading_rate=-2.0, altitude=30.0))
+    fleet.set_command(0, UnicycleSetpoint(speed=25.0, heading_rate=-2.0, altitude=30.0))
     by_field = {(e["field"], e["limit"]): e for e in fleet.pop_events()}
     assert by_field[("speed", "max_speed")]["applied"] == a.max_speed
     assert by_field[("heading_rate", "max_heading_rate")]["applied"] == -a.max_heading_rate
@@ -69,26 +70,26 @@ def test_unicycle_saturation_events(bullet_client, rng) -> None:
     tilt_event = by_field[("heading_rate", "tilt_max")]
     assert tilt_event["requested"] == -a.max_heading_rate
     assert tilt_event["applied"] == pytest.approx(-turn_limit)
-    fleet.set_command(0, UnicycleCommand(speed=10.0, heading_rate=0.2, altitude=30.0))
+    fleet.set_command(0, UnicycleSetpoint(speed=10.0, heading_rate=0.2, altitude=30.0))
     assert fleet.pop_events() == []  # inside the envelope: nothing to report
 
 
 def test_tilt_saturation_reported_once_per_episode(bullet_client, rng, run_fleet) -> None:
     fleet = fleet_of(bullet_client, ["survey_quad", "crazyflie"], rng)
-    fleet.set_command(1, VelocityCommand(v_W=[0.0, 3.0, 0.0]))
+    fleet.set_command(1, VelocitySetpoint(v_W=[0.0, 3.0, 0.0]))
     run_fleet(fleet, 240 * 4)
     events = fleet.pop_events()
     assert [(e["uav"], e["field"]) for e in events] == [(1, "tilt")]
     assert events[0]["requested"] > events[0]["applied"] == pytest.approx(float(fleet.tilt_limit[1]))
-    fleet.set_command(1, VelocityCommand(v_W=[0.0, -3.0, 0.0]))
+    fleet.set_command(1, VelocitySetpoint(v_W=[0.0, -3.0, 0.0]))
     run_fleet(fleet, 240 * 4, start_tick=240 * 4 + 1)
     assert [(e["uav"], e["field"]) for e in fleet.pop_events()] == [(1, "tilt")]
 
 
 def test_velocity_yaw_none_faces_velocity_and_explicit_yaw_holds(bullet_client, rng, run_fleet) -> None:
     fleet = fleet_of(bullet_client, ["survey_quad", "survey_quad"], rng)
-    fleet.set_command(0, VelocityCommand(v_W=[-3.0, -3.0, 0.0]))
-    fleet.set_command(1, VelocityCommand(v_W=[-3.0, -3.0, 0.0], yaw=0.5))
+    fleet.set_command(0, VelocitySetpoint(v_W=[-3.0, -3.0, 0.0]))
+    fleet.set_command(1, VelocitySetpoint(v_W=[-3.0, -3.0, 0.0], yaw=0.5))
     run_fleet(fleet, 240 * 6)
     R = fleet.state.R_WB
     assert math.atan2(R[0, 1, 0], R[0, 0, 0]) == pytest.approx(-3.0 * math.pi / 4, abs=1e-3)
@@ -110,8 +111,8 @@ def test_same_seed_same_flight_bit_for_bit(run_fleet, new_bullet_session) -> Non
         with new_bullet_session() as cid:
             opts = FleetOptions(wind=WindConfig(mean_W=(3.0, 1.0, 0.0)), downwash=True)
             fleet = fleet_of(cid, ["survey_quad", "crazyflie"], np.random.default_rng(seed), opts)
-            fleet.set_command(0, UnicycleCommand(speed=8.0, heading_rate=0.3, altitude=35.0))
-            fleet.set_command(1, PositionCommand(p_W=[6.0, 2.0, 31.0]))
+            fleet.set_command(0, UnicycleSetpoint(speed=8.0, heading_rate=0.3, altitude=35.0))
+            fleet.set_command(1, PositionSetpoint(p_W=[6.0, 2.0, 31.0]))
             run_fleet(fleet, 480)
             s = fleet.state
             return np.concatenate([s.p_W.ravel(), s.q_WB.ravel(), s.rotor_speed.ravel()])
@@ -124,7 +125,7 @@ def test_same_seed_same_flight_bit_for_bit(run_fleet, new_bullet_session) -> Non
 def test_set_command_checks_index_and_type(bullet_client, rng) -> None:
     fleet = fleet_of(bullet_client, ["crazyflie"], rng)
     with pytest.raises(IndexError):
-        fleet.set_command(1, PositionCommand(p_W=[0.0, 0.0, 1.0]))
+        fleet.set_command(1, PositionSetpoint(p_W=[0.0, 0.0, 1.0]))
     with pytest.raises(TypeError, match="dict"):
         fleet.set_command(0, {"p_W": [0, 0, 1]})  # type: ignore[arg-type]
 
@@ -152,7 +153,7 @@ def test_command_takes_effect_at_next_outer_tick(bullet_client, rng, run_fleet) 
     changes nothing until tick 10."""
     fleet = fleet_of(bullet_client, ["survey_quad"], rng, FleetOptions(outer_loop_hz=48))
     run_fleet(fleet, 6)
-    fleet.set_command(0, VelocityCommand(v_W=[5.0, 0.0, 0.0]))
+    fleet.set_command(0, VelocitySetpoint(v_W=[5.0, 0.0, 0.0]))
     omegas = []
     run_fleet(fleet, 6, start_tick=7, on_tick=lambda _t: omegas.append(fleet.state.rotor_speed[0].copy()))
     omegas = np.array(omegas)  # after ticks 7..12

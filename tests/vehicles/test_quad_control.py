@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from interfaces.setpoints import PositionSetpoint, UnicycleSetpoint, VelocitySetpoint
 from vehicles.quadrotor.airframes import load_airframe
-from vehicles.quadrotor.commands import PositionCommand, UnicycleCommand, VelocityCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet
 from vehicles.quadrotor.mixer import MotorMixer
 from vehicles.quadrotor.setpoints import WrenchSetpoint
@@ -43,7 +43,7 @@ def test_hover_holds_altitude_and_thrust_equals_weight(bullet_client, rng, run_f
     """After a 0.5 m climb, altitude holds within +-2 cm and the rotor thrusts sum to m g within 1 %."""
     a = load_airframe(name)
     fleet = make_fleet(bullet_client, name, [1.0, -2.0, 5.0], rng, yaw0=0.4)
-    fleet.set_command(0, PositionCommand(p_W=[1.0, -2.0, 5.5]))
+    fleet.set_command(0, PositionSetpoint(p_W=[1.0, -2.0, 5.5]))
     _, tick = record(fleet, run_fleet, HZ * 8)
     log, _ = record(fleet, run_fleet, HZ * 6, start=tick)
     assert np.abs(log["p"][:, 2] - 5.5).max() < 0.02
@@ -64,7 +64,7 @@ def test_velocity_step(bullet_client, rng, run_fleet, name, speed, t_settle, ove
     a = load_airframe(name)
     fleet = make_fleet(bullet_client, name, [0, 0, 20], rng)
     direction = np.array([math.cos(math.pi / 6), math.sin(math.pi / 6), 0.0])
-    fleet.set_command(0, VelocityCommand(v_W=speed * direction))
+    fleet.set_command(0, VelocitySetpoint(v_W=speed * direction))
     log, _ = record(fleet, run_fleet, HZ * 10)
     v_along = log["v"] @ direction
     v_cross = log["v"] @ np.array([-direction[1], direction[0], 0.0])
@@ -83,11 +83,11 @@ def test_velocity_step(bullet_client, rng, run_fleet, name, speed, t_settle, ove
 def test_unicycle_tracking(bullet_client, rng, run_fleet) -> None:
     """(15 m/s, 0.1 rad/s, 100 m): horizontal distance to the ideal unicycle circle < 1 m after the transient."""
     fleet = make_fleet(bullet_client, "survey_quad", [0, 0, 100], rng)
-    fleet.set_command(0, VelocityCommand(v_W=[15.0, 0.0, 0.0], yaw=0.0))
+    fleet.set_command(0, VelocitySetpoint(v_W=[15.0, 0.0, 0.0], yaw=0.0))
     _, tick = record(fleet, run_fleet, HZ * 8)
     st = fleet.state
     psi0 = math.atan2(st.R_WB[0, 1, 0], st.R_WB[0, 0, 0])
-    fleet.set_command(0, UnicycleCommand(speed=15.0, heading_rate=0.1, altitude=100.0))
+    fleet.set_command(0, UnicycleSetpoint(speed=15.0, heading_rate=0.1, altitude=100.0))
     assert fleet.pop_events() == [] or all(e["field"] == "tilt" for e in fleet.pop_events())
     log, _ = record(fleet, run_fleet, HZ * 70, start=tick)  # more than one full turn (62.8 s)
     radius = 15.0 / 0.1
@@ -116,9 +116,9 @@ def test_aggressive_manoeuvres_respect_tilt_limit(bullet_client, rng, run_fleet,
     """Thrust-axis priority: a new velocity and heading at full speed never tilt the body past tilt_max."""
     a = load_airframe("survey_quad")
     fleet = make_fleet(bullet_client, "survey_quad", [0, 0, 60], rng, options=FleetOptions(wind=wind))
-    fleet.set_command(0, VelocityCommand(v_W=first))
+    fleet.set_command(0, VelocitySetpoint(v_W=first))
     log1, tick = record(fleet, run_fleet, HZ * 6)
-    fleet.set_command(0, VelocityCommand(v_W=second))
+    fleet.set_command(0, VelocitySetpoint(v_W=second))
     log2, _ = record(fleet, run_fleet, HZ * 8, start=tick)
     tilt = np.concatenate([log1["tilt"], log2["tilt"]])
     assert tilt.max() <= a.tilt_max
@@ -129,7 +129,7 @@ def test_aggressive_manoeuvres_respect_tilt_limit(bullet_client, rng, run_fleet,
 def test_position_command_flies_to_point(bullet_client, rng, run_fleet) -> None:
     a = load_airframe("survey_quad")
     fleet = make_fleet(bullet_client, "survey_quad", [0, 0, 10], rng)
-    fleet.set_command(0, PositionCommand(p_W=[60.0, -30.0, 25.0], yaw=1.0))
+    fleet.set_command(0, PositionSetpoint(p_W=[60.0, -30.0, 25.0], yaw=1.0))
     log, _ = record(fleet, run_fleet, HZ * 20)
     assert np.linalg.norm(log["p"][-1] - [60.0, -30.0, 25.0]) < 0.1
     assert np.linalg.norm(log["v"][:, :2], axis=1).max() <= a.max_speed * 1.05
@@ -140,7 +140,7 @@ def test_position_command_flies_to_point(bullet_client, rng, run_fleet) -> None:
 @pytest.mark.parametrize("outer_hz", [48, 60, 240])
 def test_outer_loop_rates_that_divide_physics_rate(bullet_client, rng, run_fleet, outer_hz) -> None:
     fleet = make_fleet(bullet_client, "crazyflie", [0, 0, 2], rng, options=FleetOptions(outer_loop_hz=outer_hz))
-    fleet.set_command(0, PositionCommand(p_W=[1.0, 0.0, 2.0]))
+    fleet.set_command(0, PositionSetpoint(p_W=[1.0, 0.0, 2.0]))
     log, _ = record(fleet, run_fleet, HZ * 6)
     assert np.linalg.norm(log["p"][-1] - [1.0, 0.0, 2.0]) < 0.02
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from interfaces.setpoints import UnicycleSetpoint, VelocitySetpoint
 from vehicles.quadrotor.airframes import load_airframe
-from vehicles.quadrotor.commands import UnicycleCommand, VelocityCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet, _actuate, _inner_loops
 from vehicles.quadrotor.rotation import quat_to_rotmat, rotate_T, rotation_and_body_rates
 from vehicles.quadrotor.setpoints import AttitudeSetpoint
@@ -17,9 +17,9 @@ def _manoeuvring_fleet(cid: int, rng: np.random.Generator, run_fleet) -> Quadrot
     airframes = [load_airframe(name) for name in ("survey_quad", "crazyflie", "survey_quad")]
     fleet = QuadrotorFleet(cid, airframes, np.array([[0.0, 0.0, 50.0], [8.0, 0.0, 40.0], [0.0, 9.0, 60.0]]),
                            np.array([0.0, 1.0, -2.0]), 240, FleetOptions(), rng)
-    fleet.set_command(0, VelocityCommand(v_W=[15.0, -6.0, 3.0], yaw=2.5))
-    fleet.set_command(1, UnicycleCommand(speed=3.0, heading_rate=0.8, altitude=42.0))
-    fleet.set_command(2, VelocityCommand(v_W=[-12.0, 12.0, -4.0]))
+    fleet.set_command(0, VelocitySetpoint(v_W=[15.0, -6.0, 3.0], yaw=2.5))
+    fleet.set_command(1, UnicycleSetpoint(speed=3.0, heading_rate=0.8, altitude=42.0))
+    fleet.set_command(2, VelocitySetpoint(v_W=[-12.0, 12.0, -4.0]))
     run_fleet(fleet, 70)
     return fleet
 

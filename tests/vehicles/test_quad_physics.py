@@ -8,9 +8,9 @@ import numpy as np
 import pybullet as p
 import pytest
 
+from interfaces.setpoints import PositionSetpoint, VelocitySetpoint
 from vehicles.quadrotor.aero import DownwashConfig, body_drag_B, downwash_force_W, ground_effect_factor
 from vehicles.quadrotor.airframes import load_airframe
-from vehicles.quadrotor.commands import PositionCommand, VelocityCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet
 from vehicles.quadrotor.params import GRAVITY
 from vehicles.quadrotor.rotors import RotorBank
@@ -48,7 +48,7 @@ def test_body_frame_torque_gives_expected_angular_acceleration(bullet_client, rn
     """Newton-Euler check of what the fleet applies: a = F/m + g and J w_dot + w x J w = tau, in one physics step."""
     a = load_airframe("survey_quad")
     fleet = make_fleet(bullet_client, ["survey_quad"], [[0, 0, 50]], rng, yaw0=[0.7])
-    fleet.set_command(0, VelocityCommand(v_W=[6.0, -4.0, 1.0], yaw=-1.0))
+    fleet.set_command(0, VelocitySetpoint(v_W=[6.0, -4.0, 1.0], yaw=-1.0))
     tick = run_fleet(fleet, 150)  # mid-manoeuvre: tilted, rotating, rotors unequal
     s0 = fleet.state
     assert np.degrees(np.arccos(s0.R_WB[0, 2, 2])) > 5.0 and np.linalg.norm(s0.omega_B) > 0.05
@@ -184,7 +184,7 @@ def test_stacked_uavs_gap_to_zero_forces_stay_finite(bullet_client, rng, run_fle
     opts = FleetOptions(downwash=True)
     fleet = make_fleet(cid, ["survey_quad", "survey_quad"], [[0, 0, 20], [0.05, 0, 14]], rng, opts)
     a = load_airframe("survey_quad")
-    fleet.set_command(1, PositionCommand(p_W=[0.05, 0.0, 20.5]))
+    fleet.set_command(1, PositionSetpoint(p_W=[0.05, 0.0, 20.5]))
     gaps, dw, upper_thrust = [], [], []
 
     def record(_tick: int) -> None:

@@ -10,8 +10,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
+from interfaces.setpoints import PositionSetpoint, UnicycleSetpoint, VelocitySetpoint
 from vehicles.quadrotor.airframes import load_airframe
-from vehicles.quadrotor.commands import PositionCommand, UnicycleCommand, VelocityCommand
 from vehicles.quadrotor.fleet import FleetOptions, QuadrotorFleet
 from vehicles.quadrotor.wind import DrydenWind, WindConfig
 
@@ -89,12 +89,12 @@ def test_position_hold_in_gusty_wind(bullet_client, run_fleet) -> None:
 
 
 command_strategy = st.one_of(
-    st.builds(lambda x, y, z, yaw: PositionCommand(p_W=[x, y, z], yaw=yaw),
+    st.builds(lambda x, y, z, yaw: PositionSetpoint(p_W=[x, y, z], yaw=yaw),
               st.floats(-80, 80), st.floats(-80, 80), st.floats(5, 120),
               st.one_of(st.none(), st.floats(-10, 10))),
-    st.builds(lambda vx, vy, vz, yaw: VelocityCommand(v_W=[vx, vy, vz], yaw=yaw),
+    st.builds(lambda vx, vy, vz, yaw: VelocitySetpoint(v_W=[vx, vy, vz], yaw=yaw),
               st.floats(-40, 40), st.floats(-40, 40), st.floats(-10, 10), st.one_of(st.none(), st.floats(-4, 4))),
-    st.builds(lambda v, r, h: UnicycleCommand(speed=v, heading_rate=r, altitude=h),
+    st.builds(lambda v, r, h: UnicycleSetpoint(speed=v, heading_rate=r, altitude=h),
               st.floats(0, 30), st.floats(-3, 3), st.floats(10, 120)),
 )
 
@@ -132,10 +132,10 @@ def _fly_random_commands(cid: int, run_fleet, commands, seed: int) -> None:
         tick = run_fleet(fleet, 240, start_tick=tick, on_tick=check)
         a = airframes[uav]
         saturated = {e["field"] for e in fleet.pop_events() if e["uav"] == uav}
-        if isinstance(cmd, VelocityCommand):
+        if isinstance(cmd, VelocitySetpoint):
             assert (math.hypot(cmd.v_W[0], cmd.v_W[1]) > a.max_speed) == ("speed" in saturated)
             assert (abs(cmd.v_W[2]) > a.max_climb_rate) == ("climb_rate" in saturated)
-        if isinstance(cmd, UnicycleCommand):
+        if isinstance(cmd, UnicycleSetpoint):
             assert (cmd.speed > a.max_speed) == ("speed" in saturated)
             if abs(cmd.heading_rate) > a.max_heading_rate:
                 assert "heading_rate" in saturated

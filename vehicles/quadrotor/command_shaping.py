@@ -1,4 +1,4 @@
-"""Flight commands -> velocity set-points (the position loop, the unicycle integrator) with envelope saturation."""
+"""Flight set-points -> stacked velocity set-points (position loop, unicycle integrator) with envelope saturation."""
 
 from __future__ import annotations
 
@@ -7,13 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from vehicles.quadrotor.commands import (
-    FACE_VELOCITY_MIN_SPEED,
-    FlightCommand,
-    PositionCommand,
-    UnicycleCommand,
-    VelocityCommand,
-)
+from interfaces import setpoints as flight
 from vehicles.quadrotor.params import GRAVITY
 from vehicles.quadrotor.setpoints import VelocitySetpoint
 from vehicles.quadrotor.stack import AirframeStack
@@ -73,11 +67,13 @@ def _shape(mode: np.ndarray, p_sp: np.ndarray, v_sp: np.ndarray, yaw: np.ndarray
 class CommandShaper:
     """Hold every UAV's current command and produce the stacked :class:`VelocitySetpoint` at each outer-loop tick.
 
-    - :class:`PositionCommand`: towards the target at :func:`sqrt_speed` (``K_p e`` close to it, a braking-distance
+    The commands are the flight set-points of :mod:`interfaces.setpoints`:
+
+    - ``PositionSetpoint``: towards the target at :func:`sqrt_speed` (``K_p e`` close to it, a braking-distance
       law further away, horizontally and vertically), clipped to ``max_speed`` and ``max_climb_rate`` (the normal way
       to approach a far point; not reported as saturation).
-    - :class:`VelocityCommand`: used as given after saturation at :meth:`set_command`.
-    - :class:`UnicycleCommand`: ``psi_c = psi_0 + r (k - k_0) dt`` from the integer tick count ``k``,
+    - ``VelocitySetpoint``: used as given after saturation at :meth:`set_command`.
+    - ``UnicycleSetpoint``: ``psi_c = psi_0 + r (k - k_0) dt`` from the integer tick count ``k``,
       ``v = V (cos psi_c, sin psi_c, 0) + (0, 0, K_pz (h - z))``, feed-forward ``a = V r (-sin psi_c, cos psi_c, 0)``
       and heading rate ``r``.
 
@@ -113,7 +109,7 @@ class CommandShaper:
         self._out = VelocitySetpoint(v_W=np.zeros((n, 3)), a_ff_W=np.zeros((n, 3)), yaw=np.zeros(n),
                                      yaw_rate=np.zeros(n))
 
-    def set_command(self, i: int, cmd: FlightCommand, state: FleetState, tick: int) -> list[dict]:
+    def set_command(self, i: int, cmd: flight.FlightSetpoint, state: FleetState, tick: int) -> list[dict]:
         """Make ``cmd`` UAV ``i``'s command from ``tick`` on; return the saturation events it caused."""
         s = self._s
         yaw_now = float(math.atan2(state.R_WB[i, 1, 0], state.R_WB[i, 0, 0]))
@@ -127,15 +123,15 @@ class CommandShaper:
                            "requested": float(requested), "applied": float(applied), "limit": limit_name})
             return applied
 
-        if not isinstance(cmd, (PositionCommand, VelocityCommand, UnicycleCommand)):
+        if not isinstance(cmd, (flight.PositionSetpoint, flight.VelocitySetpoint, flight.UnicycleSetpoint)):
             raise TypeError(f"unsupported command type {type(cmd).__name__}")
         self._v[i] = 0.0
         self._rate[i] = 0.0
-        if isinstance(cmd, PositionCommand):
+        if isinstance(cmd, flight.PositionSetpoint):
             self._mode[i] = _POSITION
             self._p[i] = cmd.p_W
             self._yaw[i] = yaw_now if cmd.yaw is None else cmd.yaw
-        elif isinstance(cmd, VelocityCommand):
+        elif isinstance(cmd, flight.VelocitySetpoint):
             v = np.array(cmd.v_W, dtype=float)
             h = float(np.hypot(v[0], v[1]))
             h_applied = saturate("speed", h, float(s.max_speed[i]), "max_speed")
@@ -146,7 +142,7 @@ class CommandShaper:
             self._v[i] = v
             if cmd.yaw is not None:
                 self._yaw[i] = cmd.yaw
-            elif h_applied > FACE_VELOCITY_MIN_SPEED:
+            elif h_applied > flight.FACE_VELOCITY_MIN_SPEED:
                 self._yaw[i] = math.atan2(v[1], v[0])
             else:
                 self._yaw[i] = yaw_now

@@ -31,9 +31,9 @@ import numpy as np
 import pybullet as p
 from numba import njit
 
+from interfaces.setpoints import FlightSetpoint
 from vehicles.quadrotor.aero import DownwashConfig, downwash_force_W, ground_effect_factor
 from vehicles.quadrotor.command_shaping import CommandShaper
-from vehicles.quadrotor.commands import FlightCommand
 from vehicles.quadrotor.inner_loop import AttitudeController, RateController, _attitude_rates, _rate_torques
 from vehicles.quadrotor.mixer import MotorMixer, _allocate
 from vehicles.quadrotor.outer_loop import ThrustVectorController, VelocityController
@@ -159,7 +159,7 @@ class QuadrotorFleet:
 
     Notes
     -----
-    Every UAV starts hovering at ``p0_W`` with rotors at hover speed and the command ``PositionCommand(p0_W, yaw0)``.
+    Every UAV starts hovering at ``p0_W`` with rotors at hover speed and the command ``PositionSetpoint(p0_W, yaw0)``.
     A command given with :meth:`set_command` takes effect at the next outer-loop tick.
     """
 
@@ -302,7 +302,7 @@ class QuadrotorFleet:
         _inner_loops(st.R_WB, st.omega_B, sp.F_W, sp.yaw, sp.yaw_rate, self._k, self._s.alloc_inv, self._w,
                      self._rotors.omega_cmd)
 
-    def set_command(self, i: int, cmd: FlightCommand) -> None:
+    def set_command(self, i: int, cmd: FlightSetpoint) -> None:
         """Give UAV ``i`` a new command; envelope saturations are recorded as events (see :meth:`pop_events`)."""
         if not 0 <= i < len(self.body_ids):
             raise IndexError(f"uav index {i} out of range for a fleet of {len(self.body_ids)}")

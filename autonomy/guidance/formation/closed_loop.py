@@ -32,8 +32,8 @@ from autonomy.estimation.imm import IMM, cv_ct_imm
 from autonomy.estimation.measurements import Measurement, StackedMeasurement
 from autonomy.guidance.formation.guidance import FormationConfig, formation_step
 from autonomy.guidance.formation.jacobi import jacobi_pd_acceleration
-from autonomy.guidance.types import TargetEstimate
 from autonomy.metrics.fim import bearing_fim
+from interfaces.state import TargetEstimate
 
 __all__ = ["Segment", "CASES", "FormationLoopConfig", "FormationLoopResult", "manoeuvre_truth", "run_formation_loop"]
 

@@ -26,9 +26,9 @@ import numpy as np
 from autonomy.guidance.base import Guidance
 from autonomy.guidance.formation.geometry import OptimalFormation, optimal_formation
 from autonomy.guidance.formation.jacobi import JacobiGains, jacobi_pd_acceleration
-from autonomy.guidance.setpoints import VelocitySetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.metrics.fim import bearing_fim_from_directions, max_det_bearing_fim
+from interfaces.setpoints import VelocitySetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["FormationConfig", "FormationStep", "FormationGuidance", "formation_step", "trail_formation"]
 

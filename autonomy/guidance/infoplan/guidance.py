@@ -3,7 +3,7 @@
 Every UAV runs the same deterministic :class:`~autonomy.guidance.infoplan.planner.TeamInfoPlanner` on the states its
 teammates share (ids 0 … N−1), so all UAVs arrive at the same team plan without a central planner (with a lossy or
 delayed state exchange they may differ; the shared plans then keep them close). The UAV flies the first heading rate
-of its own row as a :class:`~autonomy.guidance.setpoints.UnicycleSetpoint` and shares its planned path.
+of its own row as a :class:`~interfaces.setpoints.UnicycleSetpoint` and shares its planned path.
 
 A teammate's state may be older than the planning time ``t`` (over a radio, the last state that got through; a
 teammate that plans later in the same tick has not sent this step's state yet). It is brought to ``t`` along the
@@ -23,9 +23,9 @@ import numpy as np
 from autonomy.guidance.base import Guidance
 from autonomy.guidance.infoplan.config import InfoPlannerConfig
 from autonomy.guidance.infoplan.planner import TeamInfoPlanner, TeamPlan
-from autonomy.guidance.setpoints import UnicycleSetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.sensing.measurement import wrap_angle
+from interfaces.setpoints import UnicycleSetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["InfoPlannerGuidance"]
 

@@ -1,7 +1,7 @@
 """Fisher information of range/azimuth radar measurements of a constant-velocity target, and its prediction.
 
 Target state layout ``TARGET_CV = ("x", "y", "vx", "vy")`` (m, m, m/s, m/s), the layout of
-:class:`~autonomy.guidance.types.TargetEstimate` ``P``. Constant-velocity model over a step T (Liu, Fu & Gao 2018,
+:class:`~interfaces.state.TargetEstimate` ``P``. Constant-velocity model over a step T (Liu, Fu & Gao 2018,
 eq. 4, with the corrupt printed G repaired)::
 
     F = [[I, T I], [0, I]],   G Q Gᵀ = [[T⁴/4 S, T³/2 S], [T³/2 S, T² S]],   S = diag(δx², δy²)

@@ -30,8 +30,8 @@ import numpy as np
 from autonomy.estimation.setmem.estimator import SetMembershipEstimator
 from autonomy.guidance.base import Guidance
 from autonomy.guidance.search.planner import PlannedPath, SearchDecision, SearchPlanner
-from autonomy.guidance.setpoints import VelocitySetpoint
-from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
+from interfaces.setpoints import VelocitySetpoint
+from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 __all__ = ["SetMembershipSearchGuidance", "teammate_path"]
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from autonomy.guidance.setpoints import VelocitySetpoint
-from autonomy.guidance.types import TargetEstimate
+from interfaces.setpoints import VelocitySetpoint
+from interfaces.state import TargetEstimate
 
 
 class CentroidEstimator:

@@ -1,0 +1,32 @@
+"""Validation helpers of the shared types: finite numbers and finite vectors, with messages naming the field."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["finite_number", "finite_vector"]
+
+
+def finite_number(owner: str, name: str, value: object) -> float:
+    """``value`` as a float; raises ``ValueError`` naming ``owner.name`` unless it is one finite real number."""
+    number = None
+    if not isinstance(value, (str, bytes)) and np.ndim(value) == 0:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = None
+    if number is None or not math.isfinite(number):
+        raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
+    return number
+
+
+def finite_vector(owner: str, name: str, value: object, sizes: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a read-only float array of one of the lengths ``sizes``; raises ``ValueError`` naming the field."""
+    arr = np.array(value, dtype=float).reshape(-1)
+    if arr.shape[0] not in sizes or not np.all(np.isfinite(arr)):
+        lengths = " or ".join(map(str, sizes))
+        raise ValueError(f"{owner}.{name} must be a finite array of length {lengths}, got {value!r}")
+    arr.setflags(write=False)
+    return arr

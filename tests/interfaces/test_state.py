@@ -1,0 +1,31 @@
+"""The shared states: validation names the type and the field; arrays are read-only float copies."""
+
+import numpy as np
+import pytest
+
+from interfaces.state import OwnState, TargetEstimate, TeammateState
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: OwnState(t="0", p_W=[0, 0, 0], v_W=[0, 0, 0], yaw=0.0), "OwnState.t must be a finite number"),
+    (lambda: OwnState(t=0.0, p_W=[0, 0], v_W=[0, 0, 0], yaw=0.0), "OwnState.p_W must be a finite array of length 3"),
+    (lambda: OwnState(t=0.0, p_W=[0, 0, 0], v_W=[0, 0, 0], yaw=np.inf), "OwnState.yaw"),
+    (lambda: TargetEstimate(t=0.0, p_W=[0, 0], v_W=[0, 0, 0]), "TargetEstimate.v_W must be a finite array of length 2"),
+    (lambda: TargetEstimate(t=0.0, p_W=[0, 0], v_W=[0, 0], P=np.eye(3)), "TargetEstimate.P"),
+    (lambda: TeammateState(id=-1, t=0.0, p_W=[0, 0, 0], v_W=[0, 0, 0]), "TeammateState.id"),
+    (lambda: TeammateState(id=0, t=np.nan, p_W=[0, 0, 0], v_W=[0, 0, 0]), "TeammateState.t"),
+    (lambda: TeammateState(id=0, t=0.0, p_W=[0, 0, 0], v_W=[0, 0, 0], plan_dt=0.0), "TeammateState.plan_dt"),
+])
+def test_invalid_states_rejected(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_states_hold_read_only_float_copies():
+    p = np.array([1, 2, 3])
+    own = OwnState(t=np.float32(1.5), p_W=p, v_W=[3.0, 4.0, 0.0], yaw=0.0)
+    p[0] = 7
+    assert own.p_W.tolist() == [1.0, 2.0, 3.0] and not own.p_W.flags.writeable and type(own.t) is float
+    assert own.speed == 5.0 and own.course(min_speed=0.5) == pytest.approx(np.arctan2(4.0, 3.0))
+    est = TargetEstimate(t=0.0, p_W=[0, 0], v_W=[1, 0], P=np.eye(4))
+    assert not est.P.flags.writeable and est.predict_xy(np.array([1.0, 2.0])).tolist() == [[1.0, 0.0], [2.0, 0.0]]

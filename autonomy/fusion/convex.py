@@ -147,7 +147,9 @@ def _two_input_ci(x1: np.ndarray, P1: np.ndarray, x2: np.ndarray, P2: np.ndarray
 
     A0, B0, _, _ = split(0.0)
     A1, B1, _, _ = split(1.0)
-    if A0 >= B0 and A1 <= B1:  # derivative ≡ 0 (P_1 = P_2): every ω is optimal, take the symmetric one
+    # derivative ≡ 0 (P_1 = P_2, every s_i = 1 to rounding): every ω is optimal, take the symmetric one. The rounding
+    # of the factorisations leaves r_i of a few ε of either sign, which the sign tests below would read as an end point
+    if float(np.abs(r).max()) <= 8.0 * r.size * _EPS or (A0 >= B0 and A1 <= B1):
         w = 0.5
     elif A0 >= B0:
         w = 0.0

@@ -1,4 +1,11 @@
-"""Measurements and measurement models (radar, bearings, linear position), keyed on the measurement ``kind``.
+"""Measurements and their models (radar, bearings, linear position).
+
+Every measurement carries its :class:`DetectionModel` (``meas.model``), attached by the sensor that made it: the
+model knows the measurement's name (``"radar"``, ``"bearing"``, ``"camera"``, ``"box"``: what the records call its
+``kind``), its dimension, which components are angles, the state-space model ``z = h(x) + v`` on a filter's state
+layout (:meth:`DetectionModel.bind`, with ``h``, its Jacobian and the residual), and, where one measurement alone
+fixes a ground position, its inverse (:meth:`DetectionModel.ground_fix`). Filters and trackers ask the model; nothing
+dispatches on the name.
 
 z layouts (d = target − sensor in the ENU world frame, ρ = √(dx² + dy²), r = ‖d‖):
 
@@ -19,13 +26,15 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
 __all__ = [
     "MeasurementLike", "Measurement", "StackedMeasurement", "MeasurementModel", "RadarModel", "NadirRadarModel",
     "BearingModel", "PositionModel", "StackedModel", "measurement_model", "wrap_angle", "state_indices",
+    "DetectionModel", "RadarDetectionModel", "BearingDetectionModel", "PositionDetectionModel",
+    "StackedDetectionModel", "attach_model", "detection_model",
 ]
 
 TWO_PI = 2.0 * np.pi
@@ -50,7 +59,7 @@ class MeasurementLike(Protocol):
     t_arrival: float
     sensor_id: int | str
     p_sensor_W: np.ndarray
-    kind: str
+    model: DetectionModel
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -60,7 +69,7 @@ class Measurement:
     Attributes
     ----------
     z : ndarray
-        Measured values, layout set by ``kind`` (see the module docstring); m, rad, m/s.
+        Measured values, layout set by ``model`` (see the module docstring); m, rad, m/s.
     R : ndarray
         Noise covariance of ``z``, same units squared.
     t_meas : float
@@ -71,8 +80,11 @@ class Measurement:
         Which sensor took it.
     p_sensor_W : ndarray
         Sensor position in the world frame at ``t_meas``, m (3,).
+    model : DetectionModel
+        What was measured (:class:`DetectionModel`); built from ``kind`` and ``len(z)`` when not given.
     kind : str
-        ``"radar"``, ``"bearing"``, ``"camera"`` or ``"box"``.
+        The model's name, ``"radar"`` (the default), ``"bearing"``, ``"camera"`` or ``"box"``: give ``model`` or
+        ``kind`` (a name read back from a record); after construction it always equals ``model.name``.
     v_sensor_W : ndarray or None
         Sensor velocity in the world frame, m/s (used by range rate; zero if None).
     """
@@ -83,7 +95,8 @@ class Measurement:
     t_arrival: float | None = None
     sensor_id: int | str = 0
     p_sensor_W: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    kind: str = "radar"
+    model: DetectionModel | None = None
+    kind: str | None = None
     v_sensor_W: np.ndarray | None = None
 
     def __post_init__(self) -> None:
@@ -93,8 +106,9 @@ class Measurement:
             raise ValueError(f"R must have shape {(z.size, z.size)} for z of length {z.size}, got {R.shape}")
         if not np.allclose(R, R.T):
             raise ValueError(f"R must be symmetric, got {R!r}")
-        if self.kind not in ("radar", "bearing", "camera", "box"):
-            raise ValueError(f"kind must be 'radar', 'bearing', 'camera' or 'box', got {self.kind!r}")
+        model = attach_model(self.model, self.kind, z.size, default="radar")
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "kind", model.name)
         t_arr = self.t_meas if self.t_arrival is None else self.t_arrival
         if t_arr < self.t_meas:
             raise ValueError(f"t_arrival must be >= t_meas={self.t_meas}, got {t_arr}")
@@ -148,6 +162,11 @@ class StackedMeasurement:
     def t_arrival(self) -> float:
         """Latest arrival among the parts, s."""
         return max(float(m.t_arrival) for m in self.parts)
+
+    @property
+    def model(self) -> StackedDetectionModel:
+        """The parts' models, stacked."""
+        return StackedDetectionModel(parts=tuple(m.model for m in self.parts))
 
     sensor_id = "stacked"
     kind = "stacked"
@@ -404,15 +423,157 @@ class StackedModel(MeasurementModel):
 
 
 def measurement_model(meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> MeasurementModel:
-    """The measurement model for ``meas`` (chosen by ``meas.kind`` and ``len(meas.z)``) on a state ``layout``."""
-    kind = meas.kind
-    if kind == "stacked":
-        return StackedModel([measurement_model(p, layout, target_height) for p in meas.parts])  # type: ignore[attr-defined]
-    m = np.size(meas.z)
-    if kind == "radar":
-        return RadarModel(layout, meas.p_sensor_W, m, getattr(meas, "v_sensor_W", None), target_height)
-    if kind in ("bearing", "camera"):
-        return BearingModel(layout, meas.p_sensor_W, m, target_height)
-    if kind == "box":
-        return PositionModel(layout, m)
-    raise ValueError(f"no measurement model for kind {kind!r}")
+    """The state-space model of ``meas`` on a state ``layout``: ``meas.model.bind(meas, layout, target_height)``."""
+    return meas.model.bind(meas, layout, target_height)
+
+
+class DetectionModel(ABC):
+    """What one measurement is, as the sensor that made it declares it (Stone Soup's ``measurement_model`` of a
+    detection): a name, a dimension, angle components, ``h(x)`` on any state layout and, where it exists, the inverse
+    to a ground position.
+
+    Attributes
+    ----------
+    name : str
+        The measurement's name, as the records call its ``kind``.
+    dim : int
+        Length of ``z``.
+    fixes_position : bool
+        Whether one such measurement alone fixes a ground position (:meth:`ground_fix` gives it).
+    """
+
+    name: str
+    dim: int
+    fixes_position: ClassVar[bool] = False
+
+    @abstractmethod
+    def bind(self, meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> MeasurementModel:
+        """``z = h(x) + v`` for ``meas`` (its sensor pose) on the state ``layout``; targets without a ``z`` state lie
+        on the plane ``z = target_height`` (m). The model gives ``h``, its Jacobian and the wrapped residual; the
+        noise covariance is ``meas.R``."""
+
+    def ground_fix(self, meas: MeasurementLike, target_height: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
+        """Ground position ``(x, y)`` (m) and its 2x2 covariance (m²) from ``meas`` alone (the inverse of ``h``), or
+        None if one such measurement cannot fix a position."""
+        return None
+
+    def bearing_line(self, meas: MeasurementLike) -> tuple[float, float] | None:
+        """``(azimuth, variance)`` (rad, rad²) of the line of sight of a bearing-only measurement, or None for any
+        other (crossing lines of several bearings fix a position)."""
+        return None
+
+    def _check_dim(self, allowed: tuple[int, ...]) -> None:
+        if self.dim not in allowed:
+            raise ValueError(f"{type(self).__name__}.dim must be one of {allowed} for {self.name!r}, got {self.dim!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class RadarDetectionModel(DetectionModel):
+    """Radar ``[r, az]``, ``[r, az, el]`` or ``[r, az, el, ṙ]`` (module docstring); ``dim`` is the length of ``z``."""
+
+    dim: int
+    name: str = field(default="radar", init=False)
+    fixes_position: ClassVar[bool] = True
+
+    def __post_init__(self) -> None:
+        self._check_dim((2, 3, 4))
+
+    def bind(self, meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> RadarModel:
+        return RadarModel(layout, meas.p_sensor_W, self.dim, getattr(meas, "v_sensor_W", None), target_height)
+
+    def ground_fix(self, meas: MeasurementLike, target_height: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Range and azimuth to a point on the plane ``z = target_height``; first-order covariance: the range error
+        along the line of sight (scaled by ``r/ρ``), the azimuth error across it."""
+        z = np.asarray(meas.z, dtype=float)
+        R = np.asarray(meas.R, dtype=float)
+        p_s = np.asarray(meas.p_sensor_W, dtype=float)
+        rng, az = z[0], z[1]
+        dz = target_height - p_s[2]
+        rho2 = rng * rng - dz * dz
+        rho = np.sqrt(rho2) if rho2 > 0 else 0.0
+        xy = p_s[:2] + rho * np.array([np.cos(az), np.sin(az)])
+        along = (rng / rho) if rho > 1e-6 else 1.0
+        J = np.array([[np.cos(az) * along, -rho * np.sin(az)], [np.sin(az) * along, rho * np.cos(az)]])
+        P = J @ R[:2, :2] @ J.T
+        return xy, P
+
+
+@dataclass(frozen=True, kw_only=True)
+class BearingDetectionModel(DetectionModel):
+    """Bearings ``[az]`` or ``[az, el]`` of a passive sensor (``name="bearing"``) or a camera (``name="camera"``)."""
+
+    dim: int
+    name: str = "bearing"
+
+    def __post_init__(self) -> None:
+        if self.name not in ("bearing", "camera"):
+            raise ValueError(f"BearingDetectionModel.name must be 'bearing' or 'camera', got {self.name!r}")
+        self._check_dim((1, 2))
+
+    def bind(self, meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> BearingModel:
+        return BearingModel(layout, meas.p_sensor_W, self.dim, target_height)
+
+    def bearing_line(self, meas: MeasurementLike) -> tuple[float, float]:
+        return float(np.atleast_1d(meas.z)[0]), float(np.atleast_2d(meas.R)[0, 0])
+
+
+@dataclass(frozen=True, kw_only=True)
+class PositionDetectionModel(DetectionModel):
+    """A position ``[x, y]`` or ``[x, y, z]`` (the bounded-error box sensor)."""
+
+    dim: int
+    name: str = field(default="box", init=False)
+    fixes_position: ClassVar[bool] = True
+
+    def __post_init__(self) -> None:
+        self._check_dim((2, 3))
+
+    def bind(self, meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> PositionModel:
+        return PositionModel(layout, self.dim)
+
+    def ground_fix(self, meas: MeasurementLike, target_height: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        z = np.asarray(meas.z, dtype=float)
+        R = np.asarray(meas.R, dtype=float)
+        return z[:2].copy(), R[:2, :2].copy()
+
+
+@dataclass(frozen=True, kw_only=True)
+class StackedDetectionModel(DetectionModel):
+    """The models of a :class:`StackedMeasurement`'s parts, rows stacked."""
+
+    parts: tuple[DetectionModel, ...]
+    name: str = field(default="stacked", init=False)
+
+    @property
+    def dim(self) -> int:  # type: ignore[override]
+        return sum(m.dim for m in self.parts)
+
+    def bind(self, meas: MeasurementLike, layout: tuple[str, ...], target_height: float = 0.0) -> StackedModel:
+        return StackedModel([p.model.bind(p, layout, target_height) for p in meas.parts])  # type: ignore[attr-defined]
+
+
+def detection_model(name: str, dim: int) -> DetectionModel:
+    """The model called ``name`` (``"radar"``, ``"bearing"``, ``"camera"`` or ``"box"``) for a ``z`` of length
+    ``dim``: how a measurement read back from a record by its ``kind`` gets its model."""
+    if name == "radar":
+        return RadarDetectionModel(dim=dim)
+    if name in ("bearing", "camera"):
+        return BearingDetectionModel(dim=dim, name=name)
+    if name == "box":
+        return PositionDetectionModel(dim=dim)
+    raise ValueError(f"kind must be 'radar', 'bearing', 'camera' or 'box', got {name!r}")
+
+
+def attach_model(model: DetectionModel | None, kind: str | None, dim: int,
+                 default: str | None = None) -> DetectionModel:
+    """A measurement's model from its constructor's ``model`` or ``kind`` (a name, :func:`detection_model`;
+    ``default`` when both are None), checked against the length ``dim`` of its ``z``."""
+    if model is None:
+        if kind is None and default is None:
+            raise ValueError("a measurement needs its model (or the kind that names it)")
+        model = detection_model(default if kind is None else kind, dim)
+    elif kind is not None and kind != model.name:
+        raise ValueError(f"kind {kind!r} contradicts the model {model.name!r}")
+    if model.dim != dim:
+        raise ValueError(f"z has {dim} components, the {model.name!r} model {model.dim}")
+    return model

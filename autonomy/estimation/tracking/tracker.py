@@ -152,37 +152,42 @@ class Tracker:
         return [(key[0], dets) for key, dets in sorted(scans.items(), key=lambda kv: kv[0][0])]
 
     def _absorb(self, detections: Sequence[MeasurementLike], deferral: InformationDeferral) -> SqrtInformation | None:
-        """Initiate, gate, update and delete from ``detections``; returns what ``deferral`` collected."""
+        """Initiate, gate, update and delete from ``detections``, scan by scan; returns what ``deferral`` collected."""
         for t_meas, scan in self._scans(detections):
             self._drop_coasted(t_meas)
-            if not self.tracks:
-                deferral.clear()  # made against a track that is gone
-                self._initiate(scan)
-                continue
-            track = self.tracks[0]
-            if t_meas < track.filter.t:
-                continue  # out of sequence: older than the track
-            (assoc,) = self.associator.associate([track], scan)
-            self.gated_out += assoc.gated_out
-            chosen = assoc.detections
-            if not chosen:
-                track.missed += self.fixer.fixes_position(scan)
-                if self.divergence.deletes(track, t_meas):  # diverged: start again from these fixes
-                    self.tracks.remove(track)
-                    deferral.clear()
-                    self.dropped_diverged += 1
-                    self.initiator.reset()
-                    self._initiate(scan)
-                continue
-            best = chosen[0] if len(chosen) == 1 else StackedMeasurement(parts=tuple(chosen))
-            deferral.update(track.filter, best)
-            if self.fixer.fixes_position(chosen):
-                track.missed = 0
-            self.updates += 1
-            for d in chosen:
-                self.used_by_sensor[d.sensor_id] = self.used_by_sensor.get(d.sensor_id, 0) + 1
-            track.last_update_t = t_meas
+            self._process_scan(t_meas, scan, deferral)
         return deferral.total()
+
+    def _process_scan(self, t_meas: float, scan: Sequence[MeasurementLike], deferral: InformationDeferral) -> None:
+        """One scan taken at ``t_meas`` (s), after the coasting deleter: steps 2–5 of the module docstring, the
+        single-target policy (a multi-target tracker replaces this with its own)."""
+        if not self.tracks:
+            deferral.clear()  # made against a track that is gone
+            self._initiate(scan)
+            return
+        track = self.tracks[0]
+        if t_meas < track.filter.t:
+            return  # out of sequence: older than the track
+        (assoc,) = self.associator.associate([track], scan)
+        self.gated_out += assoc.gated_out
+        chosen = assoc.detections
+        if not chosen:
+            track.missed += self.fixer.fixes_position(scan)
+            if self.divergence.deletes(track, t_meas):  # diverged: start again from these fixes
+                self.tracks.remove(track)
+                deferral.clear()
+                self.dropped_diverged += 1
+                self.initiator.reset()
+                self._initiate(scan)
+            return
+        best = chosen[0] if len(chosen) == 1 else StackedMeasurement(parts=tuple(chosen))
+        deferral.update(track.filter, best)
+        if self.fixer.fixes_position(chosen):
+            track.missed = 0
+        self.updates += 1
+        for d in chosen:
+            self.used_by_sensor[d.sensor_id] = self.used_by_sensor.get(d.sensor_id, 0) + 1
+        track.last_update_t = t_meas
 
     def _initiate(self, scan: Sequence[MeasurementLike]) -> None:
         new = self.initiator.initiate(scan)

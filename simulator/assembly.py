@@ -330,7 +330,7 @@ class Assembly:
             z = np.full(4, np.nan)
             z[: min(4, d.z.size)] = d.z[:4]
             self.recorder.append("detections", tick=tick, t_meas=d.t_meas, t_arrival=d.t_arrival, uav=slot.uav,
-                                 sensor=slot.name, kind=d.kind, truth_id=int(tid),
+                                 sensor=slot.name, kind=d.model.name, truth_id=int(tid),
                                  z0=z[0], z1=z[1], z2=z[2], z3=z[3])
 
     def _record_agent(self, tick: int, t: float, uav: int, result: Any) -> None:

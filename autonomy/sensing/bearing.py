@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from autonomy.estimation.measurements import BearingDetectionModel
+
 from .fov import FieldOfRegard
 from .measurement import Detection, Sensor, SensorOutput, azimuth_elevation, wrap_angle
 from .scene import SceneQuery, SensorPose, TargetTruth
@@ -77,6 +79,7 @@ class BearingSensor(Sensor):
         self.sensor_id = sensor_id
         self.rate_hz = config.rate_hz
         self.latency_s = config.latency_s
+        self.model = BearingDetectionModel(dim=config.R.shape[0], name="bearing")
 
     def measure(
         self, tick_time_s: float, pose: SensorPose, targets: TargetTruth, scene: SceneQuery, rng: np.random.Generator
@@ -104,7 +107,7 @@ class BearingSensor(Sensor):
                 t_arrival=tick_time_s + cfg.latency_s,
                 sensor_id=self.sensor_id,
                 p_sensor_W=pose.p_W,
-                kind="bearing",
+                model=self.model,
             )
             for i in order
         )

@@ -27,6 +27,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from autonomy.estimation.measurements import PositionDetectionModel
 from worlds.geometry import Building
 
 from .measurement import Detection, Sensor, SensorOutput
@@ -149,6 +150,7 @@ class BoxSensor(Sensor):
         self.sensor_id = sensor_id
         self.rate_hz = config.rate_hz
         self.latency_s = config.latency_s
+        self.model = PositionDetectionModel(dim=2)
         self._building_polys = shapely.STRtree([shapely.Polygon(b.footprint) for b in self.buildings])
 
     def observed_region(self, pose: SensorPose) -> BaseGeometry:
@@ -198,7 +200,7 @@ class BoxSensor(Sensor):
                 t_arrival=tick_time_s + cfg.latency_s,
                 sensor_id=self.sensor_id,
                 p_sensor_W=pose.p_W,
-                kind="box",
+                model=self.model,
                 bound=bound,
             )
             for i in order

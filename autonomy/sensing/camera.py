@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from autonomy.estimation.measurements import BearingDetectionModel
+
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation
 from .scene import CameraIntrinsics, CameraPose, RenderedImage, SceneQuery, SensorPose, TargetTruth, yaw_rot
 
@@ -184,6 +186,7 @@ class Camera(Sensor):
         self.rate_hz = config.rate_hz
         self.latency_s = config.latency_s
         self.intrinsics = config.intrinsics
+        self.model = BearingDetectionModel(dim=2, name="camera")  # [az, el] of the blob's centroid ray
 
     def bearing_of_pixel(self, uv: np.ndarray, cam: CameraPose) -> np.ndarray:
         """World azimuth and elevation (N, 2) (rad) of the rays through pixels ``uv`` (N, 2)."""
@@ -240,7 +243,7 @@ class Camera(Sensor):
                     t_arrival=tick_time_s + cfg.latency_s,
                     sensor_id=self.sensor_id,
                     p_sensor_W=cam.p_W,
-                    kind="camera",
+                    model=self.model,
                     pixel_box=blob.box + np.tile(duv, 2),
                 )
             )

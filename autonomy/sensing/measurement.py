@@ -4,6 +4,9 @@ A sensor's :meth:`Sensor.measure` returns a :class:`SensorOutput`: the :class:`D
 see, and separately the truth association (target id per detection, ``-1`` for clutter) that only the recorder
 may read.
 
+Each detection carries its measurement model (:class:`~autonomy.estimation.measurements.DetectionModel`), attached
+by the sensor: what the estimators ask for ``h(x)``, its dimension and its name (the ``kind`` the records store).
+
 Measurement layouts (``d = p_target - p_sensor`` in ENU):
 
 - ``"radar"``: ``z = [r, az, el]`` or ``[r, az, el, r_dot]`` with ``r = |d|``, ``az = atan2(d_y, d_x)``,
@@ -19,6 +22,8 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+
+from autonomy.estimation.measurements import DetectionModel, attach_model
 
 from .scene import SceneQuery, SensorPose, TargetTruth
 
@@ -46,7 +51,7 @@ class Detection:
     Attributes
     ----------
     z : np.ndarray
-        (m,) measurement vector in the layout of ``kind`` (module docstring): m, rad, m/s.
+        (m,) measurement vector in the layout of ``model`` (module docstring): m, rad, m/s.
     R : np.ndarray
         (m, m) noise covariance in the units of ``z`` squared (for ``"box"``: the covariance of the uniform error,
         ``bound**2 / 3``).
@@ -58,8 +63,12 @@ class Detection:
         Which sensor produced it.
     p_sensor_W : np.ndarray
         (3,) sensor position at ``t_meas`` (m).
+    model : DetectionModel
+        What was measured: ``h(x)`` on any state layout, the dimension, the name; the sensor attaches it (built from
+        ``kind`` and ``len(z)`` when not given).
     kind : str
-        ``"radar"``, ``"bearing"``, ``"camera"`` or ``"box"``.
+        The model's name, ``"radar"``, ``"bearing"``, ``"camera"`` or ``"box"``: give ``model`` or ``kind`` (a name
+        read back from a record); after construction it always equals ``model.name``.
     pixel_box : np.ndarray | None
         Camera only: (4,) ``[u_min, v_min, u_max, v_max]`` of the detected blob (px, continuous coordinates).
     bound : np.ndarray | None
@@ -72,7 +81,8 @@ class Detection:
     t_arrival: float
     sensor_id: str
     p_sensor_W: np.ndarray
-    kind: MeasurementKind
+    model: DetectionModel | None = None
+    kind: MeasurementKind | None = None
     pixel_box: np.ndarray | None = None
     bound: np.ndarray | None = None
 
@@ -83,8 +93,14 @@ class Detection:
             raise ValueError(f"Detection.R must be ({z.size}, {z.size}), got {R.shape}")
         if self.t_arrival < self.t_meas:
             raise ValueError(f"Detection.t_arrival ({self.t_arrival}) must be >= t_meas ({self.t_meas})")
-        if self.kind not in ("radar", "bearing", "camera", "box"):
-            raise ValueError(f"Detection.kind must be radar|bearing|camera|box, got {self.kind!r}")
+        try:
+            model = attach_model(self.model, self.kind, z.size)
+        except ValueError as e:
+            raise ValueError(f"Detection.model: {e}") from None
+        if model.name not in ("radar", "bearing", "camera", "box"):
+            raise ValueError(f"Detection.kind must be radar|bearing|camera|box, got {model.name!r}")
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "kind", model.name)
         for arr in (z, R):
             arr.setflags(write=False)
         object.__setattr__(self, "z", z)

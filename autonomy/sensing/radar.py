@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from autonomy.estimation.measurements import RadarDetectionModel
+
 from .fov import FieldOfRegard
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation, wrap_angle
 from .scene import SceneQuery, SensorPose, TargetTruth
@@ -148,6 +150,7 @@ class Radar(Sensor):
         self.sensor_id = sensor_id
         self.rate_hz = config.rate_hz
         self.latency_s = config.latency_s
+        self.model = RadarDetectionModel(dim=config.R.shape[0])
 
     def detectable(self, pose: SensorPose, targets: TargetTruth, scene: SceneQuery) -> tuple[np.ndarray, np.ndarray]:
         """Which targets could be detected (geometry, notch, line of sight) and their detection probability.
@@ -214,7 +217,7 @@ class Radar(Sensor):
                 t_arrival=t_arr,
                 sensor_id=self.sensor_id,
                 p_sensor_W=pose.p_W,
-                kind="radar",
+                model=self.model,
             )
             for i in order
         )

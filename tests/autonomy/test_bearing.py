@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from autonomy.estimation.measurements import BearingDetectionModel
 from autonomy.sensing.bearing import BearingConfig, BearingSensor
 from autonomy.sensing.fake_scene import FakeScene
 from autonomy.sensing.fov import FieldOfRegard
@@ -29,6 +30,7 @@ def test_azimuth_only_layout_and_true_values():
     assert det.z.shape == (1,) and det.R.shape == (1, 1)
     assert det.z[0] == pytest.approx(np.arctan2(100.0, 100.0), abs=1e-7)
     assert (det.t_meas, det.t_arrival, det.kind) == (2.0, 2.1, "bearing")
+    assert det.model is sensor.model and det.model == BearingDetectionModel(dim=1, name="bearing")
 
 
 @pytest.mark.parametrize("with_elevation", [False, True], ids=["az", "az_el"])

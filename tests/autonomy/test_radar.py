@@ -7,6 +7,7 @@ import pybullet as p
 import pytest
 from scipy import stats
 
+from autonomy.estimation.measurements import RadarDetectionModel
 from autonomy.sensing.fake_scene import FakeScene
 from autonomy.sensing.fov import FieldOfRegard
 from autonomy.sensing.measurement import CLUTTER_ID, azimuth_elevation, wrap_angle
@@ -117,6 +118,7 @@ def test_range_rate_sign_and_latency():
     r = np.linalg.norm(pt - POSE.p_W)
     assert det.z[3] == pytest.approx(-12.0 * 600.0 / r, abs=5 * SIGMAS["sigma_range_rate"])
     assert det.t_meas == 3.5 and det.t_arrival == 3.75 and det.sensor_id == "uav1/radar" and det.kind == "radar"
+    assert det.model is radar.model and det.model == RadarDetectionModel(dim=4)
     assert out.truth_ids.tolist() == [3]
 
 

@@ -1,22 +1,26 @@
 """Road-constrained single-target tracker: :class:`SingleTargetTracker` with a :class:`RoadNetworkFilter` as its filter.
 
-Initiation (two-point), χ² gating, association, coasting and loss are the base tracker's; once a track is confirmed its
-unconstrained filter is wrapped in a :class:`RoadNetworkFilter`, which keeps it as the off-map fallback and runs the
-road hypotheses alongside. ``step(t, detections)`` returns the same :class:`TargetEstimate` as the other estimators.
+Initiation (two-point), χ² gating, association, coasting and loss are the base tracker's parts; the filter factory
+(:class:`RoadFilters`) wraps a confirmed track's unconstrained filter in a :class:`RoadNetworkFilter`, which keeps it
+as the off-map fallback and runs the road hypotheses alongside, and the gate measures against that fallback
+(:func:`unconstrained`). ``step(t, detections)`` returns the same :class:`TargetEstimate` as the other estimators.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
+from autonomy.estimation.base import Filter
 from autonomy.estimation.road.config import RoadFilterConfig
 from autonomy.estimation.road.network_filter import RoadNetworkFilter
 from autonomy.estimation.road.roadmap import RoadMap
-from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
+from autonomy.estimation.tracker import ConfiguredFilters, SingleTargetTracker, TrackerConfig, make_motion_model
+from autonomy.estimation.tracking.initiator import FilterFactory
 from worlds.roads.network import RoadNetwork
 
-__all__ = ["RoadTrackerConfig", "RoadConstrainedTracker"]
+__all__ = ["RoadConstrainedTracker", "RoadFilters", "RoadTrackerConfig", "unconstrained"]
 
 
 def _paper_tracker() -> TrackerConfig:
@@ -47,6 +51,37 @@ class RoadTrackerConfig:
             raise ValueError(f"RoadTrackerConfig.road must be a RoadFilterConfig, got {type(self.road).__name__}")
 
 
+class RoadFilters:
+    """A new track's filter wrapped in a :class:`RoadNetworkFilter`: the unconstrained filter of ``base`` stays the
+    off-map fallback and the road hypotheses run alongside.
+
+    Parameters
+    ----------
+    base : FilterFactory
+        Builds the unconstrained filter from ``(x0, P0, t0)``.
+    roadmap : RoadMap
+        The road map of the hypotheses.
+    config : RoadFilterConfig
+        Constrained variant, constraint noises, junction and off-map settings.
+    """
+
+    def __init__(self, base: FilterFactory, roadmap: RoadMap, config: RoadFilterConfig) -> None:
+        self.base = base
+        self.roadmap = roadmap
+        self.config = config
+
+    def __call__(self, x0: np.ndarray, P0: np.ndarray, t0: float) -> RoadNetworkFilter:
+        """The road-network filter around the unconstrained one started from ``(x0, P0)`` at ``t0`` (s)."""
+        return RoadNetworkFilter(self.base(x0, P0, t0), self.roadmap, self.config)
+
+
+def unconstrained(f: Filter) -> Filter:
+    """The filter to gate against: a road-network filter's unconstrained fallback (a detection is validated if it
+    is plausible for the target at all, so a car leaving the road is not gated out by the constrained estimate,
+    tight across the road), any other filter itself."""
+    return f.unconstrained if isinstance(f, RoadNetworkFilter) else f
+
+
 class RoadConstrainedTracker(SingleTargetTracker):
     """Single-target tracker whose estimate follows the road network (see the module docstring).
 
@@ -59,28 +94,14 @@ class RoadConstrainedTracker(SingleTargetTracker):
     """
 
     def __init__(self, config: RoadTrackerConfig, network: RoadNetwork) -> None:
-        super().__init__(config.tracker)
+        model = make_motion_model(config.tracker)
+        roadmap = RoadMap(network, config.road.constraint, vertex_spacing=config.road.vertex_spacing,
+                          line_curvature=config.road.line_curvature)
+        super().__init__(config.tracker, model=model,
+                         filters=RoadFilters(ConfiguredFilters(config.tracker, model), roadmap, config.road),
+                         gating_filter=unconstrained)
         self.road_config = config
-        self.roadmap = RoadMap(network, config.road.constraint, vertex_spacing=config.road.vertex_spacing,
-                               line_curvature=config.road.line_curvature)
-
-    def _initiate(self, dets: Sequence[object]) -> bool:
-        ok = super()._initiate(dets)
-        if ok:
-            self.filter = RoadNetworkFilter(self.filter, self.roadmap, self.road_config.road)
-        return ok
-
-    def _nis(self, det: object) -> float:
-        """Gate against the unconstrained filter: a detection is validated if it is plausible for the target at all,
-        so a car leaving the road is not gated out by the (tight across the road) constrained estimate."""
-        f = self.filter
-        if not isinstance(f, RoadNetworkFilter):
-            return super()._nis(det)
-        self.filter = f.unconstrained
-        try:
-            return super()._nis(det)
-        finally:
-            self.filter = f
+        self.roadmap = roadmap
 
     @property
     def on_road(self) -> bool:

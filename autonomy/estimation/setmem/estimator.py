@@ -39,6 +39,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from autonomy.estimation.measurements import PositionDetectionModel
 from autonomy.sensing.measurement import Detection
 from worlds.geometry import Building
 
@@ -245,7 +246,7 @@ class SetMembershipEstimator:
                 raise ValueError("detections were given with an empty observed region")
             self._local = est
             return est
-        if any(d.kind != "box" or d.bound is None for d in detections):
+        if any(not isinstance(d.model, PositionDetectionModel) or d.bound is None for d in detections):
             raise ValueError("SetMembershipEstimator.update needs box detections with a bound")
         z = np.array([d.z[:2] for d in detections]).reshape(-1, 2)
         w = np.array([d.bound[:2] for d in detections]).reshape(-1, 2)

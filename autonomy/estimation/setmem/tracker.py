@@ -3,11 +3,15 @@
 A bounded-error scan is two things: the ground region ``F`` the sensor observed (footprint less the building
 shadows) and the box detections inside it. The region carries information even with no detection (no target is in
 ``F``), so it reaches the tracker on its own channel, :meth:`SetMembershipTracker.observe`; the detections come
-through :meth:`SetMembershipTracker.step` like any estimator's. At a step, every scan that has arrived is applied in
-the order it was taken: predict to the scan's time, correct with its region and the detections taken then (regions of
-one time from several sensors are united). A scan older than the sets cannot be applied (the sets cannot be predicted
-backwards); it is dropped and counted in :attr:`SetMembershipTracker.late_scans`. Then the sets are predicted to the
-step's time.
+through :meth:`SetMembershipTracker.step` like any estimator's (the box detections' model,
+:class:`~autonomy.estimation.measurements.PositionDetectionModel`, with their error bound). The Gaussian trackers'
+other parts (initiation, gating, association, deletion: :mod:`autonomy.estimation.tracking`) have no counterpart
+here: the sets hold every target consistent with the scans, so nothing is started, gated or dropped.
+
+At a step, every scan that has arrived is applied in the order it was taken: predict to the scan's time, correct
+with its region and the detections taken then (regions of one time from several sensors are united). A scan older
+than the sets cannot be applied (the sets cannot be predicted backwards); it is dropped and counted in
+:attr:`SetMembershipTracker.late_scans`. Then the sets are predicted to the step's time.
 
 :meth:`SetMembershipTracker.step` returns ``None``: the sets replace a point estimate (paper 004 tracks an unknown
 number of unlabelled targets). The team's set fusion and the search guidance read
@@ -21,6 +25,7 @@ from dataclasses import dataclass
 
 from shapely.geometry.base import BaseGeometry
 
+from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.sensing.measurement import Detection
 
 from . import polygons as pg
@@ -28,7 +33,7 @@ from .estimator import SetMembershipConfig, SetMembershipEstimator
 
 __all__ = ["ObservedRegion", "SetMembershipTracker"]
 
-_SAME_TIME = 1e-9  # s: scans stamped within this of each other are one scan
+_SAME_TIME = TIME_TOLERANCE  # s: scans stamped within this of each other are one scan (as in the trackers)
 
 
 @dataclass(frozen=True, kw_only=True)

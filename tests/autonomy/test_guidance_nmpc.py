@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from autonomy.guidance.keepout import footprint_distance
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.nmpc import NmpcStandoffGuidance
 from autonomy.guidance.nmpc_config import NmpcConfig
 from autonomy.guidance.setpoints import UnicycleSetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate, TeammateState
 from autonomy.guidance.vector_field import wrap_angle
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 from worlds.geometry import Building
 
 RD = 120.0

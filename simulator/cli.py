@@ -36,7 +36,7 @@ def _run(args: argparse.Namespace) -> int:
     if result.status == "interrupted":
         return 130
     if video is not None:  # a failed run's partial record still makes a video of what happened up to the failure
-        from simulator.render.replay import render_run
+        from simulator.render.video import render_run
 
         try:
             print(f"video: {render_run(out, video)}")

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["StaticDecoys", "build_decoys", "cone_axis"]
+__all__ = ["DECOY_CAR", "StaticDecoys", "build_decoys", "cone_axis"]
 
 
 def cone_axis(yaw: float, tilt: float) -> np.ndarray:
@@ -50,13 +50,16 @@ class StaticDecoys:
         return len(self.yaw)
 
 
+DECOY_CAR = "sedan"  # the car type (vehicles/cars) whose body a decoy has
+
+
 def build_decoys(specs: Sequence[object], scene: object, rgba: Sequence[float]) -> StaticDecoys | None:
     """Add a static body per ``decoys`` entry (sedan-sized, painted ``rgba``) to ``scene``; None without decoys."""
     if not specs:
         return None
     from vehicles.car.params import load_car
 
-    car = load_car("sedan")
+    car = load_car(DECOY_CAR)
     size = (car.length, car.width, car.height)
     p = np.array([d.position for d in specs], dtype=float)
     yaw = np.radians([d.yaw_deg for d in specs])

@@ -18,157 +18,51 @@ positions q_j,k come from their shared plans (or constant-velocity extrapolation
 with an exact L1 penalty, so the problem is always feasible; the slack is zero whenever the hard problem is feasible
 and the penalty is large enough. The plan is 2-D at a fixed altitude clamped into the configured band.
 
-Solver choice. The cost is a sum of squares; its Gauss–Newton Hessian σ J_Rᵀ J_R (+ 1e-6 I) is positive
-semi-definite by construction. With CasADi's exact Hessian the SQP had to regularise an indefinite matrix and needed
-18–50 iterations from a cold start. Measured on the benchmark problem (2 UAVs, N = 20, warm-started from the shifted
-plan, closed loop around a moving target, 2-core shared machine):
+Configuration: :class:`~autonomy.guidance.nmpc_config.NmpcConfig`. The problem is built symbolically in
+:mod:`autonomy.guidance.nmpc_problem`; its parameter vector (initial state, target, teammate and keep-out slots) is
+laid out once in :class:`~autonomy.guidance.nmpc_layout.ParameterLayout`, packed here and unpacked there.
 
-- ``sqpmethod`` + ``qrqp`` (default, "sqp"): median 3 iterations, ≈ 1.8 ms p50 / 2.5 ms p95 CPU with the Gauss–Newton
-  Hessian, ≈ 2.1 / 3.4 ms with the constraint-curvature Hessian below (at 830b029, with inert building rows);
-- IPOPT warm-started (``print_level 0``, ``sb yes``, same Hessian): ≈ 15 iterations, ≈ 6–13 ms p50 — the barrier
-  method restarts from an interior point every call and cannot exploit the active-set warm start;
-- one real-time iteration ("rti"): ≈ 0.4–0.7 ms and as accurate as "sqp" around a free orbit, but in the town
-  scenario with building keep-outs it diverged (mean standoff error of hundreds of metres): not robust enough as
-  the default.
-
-Why the Gauss–Newton SQP stalled in ``road_standoff`` (physics, radar estimates of a stop-and-go car; seed 2, 40 s:
-41 of 156 warm solves capped at 30 iterations, 31 retried by IPOPT, none with a building constrained — at 60–70 m every
-building of that town is flown over): the UAVs there sit on their speed bounds for the whole horizon chasing a
-20–30° phase error, so the dynamics' multipliers (costates) are large and the residuals are far from zero. The
-Gauss–Newton model then misses the curvature λᵀ∇²f_d of the heading dynamics; the QP steps zig-zag the heading rate
-along the horizon, the line search fails ("3F" in CasADi's log) and the iterates cycle with a constraint violation
-of ≈ 0.1–10 that the iteration cap never clears; IPOPT with the exact Hessian converged on the same problems in
-≈ 12–18 iterations. The QP solver is not the cause (qpOASES and DAQP stalled on the same problems). Hence
-the constraint-curvature Hessian: the Gauss–Newton cost Hessian plus the exact curvature Σ λ_j ∇²g_j of the
-dynamics and constraints, made positive definite by CasADi's block-wise eigenvalue clipping (the Hessian's strongly
-connected components are per-stage blocks of at most 5 × 5). Near a solution with negative curvature the clipped
-model converges only linearly, so its cap is 15 iterations and a capped iterate that satisfies all constraints
-within 1e-3 is used (counted in ``stats.inexact``): the next call continues from it. Alone (seeds 2 / 3, thread CPU
-time of the solver calls) it cut the IPOPT retries 31 / 22 → 5 / 3 and the NMPC time per 40 s run 2.95 / 2.67 s →
-1.66 / 1.55 s, but made the benchmark problem slower (CPU p50 / p95 1.8 / 2.5 → 2.1 / 3.4 ms). The cost is not the
-clipping (≈ 0.1 ms per solve) but evaluating the exact Hessian: ≈ 15 000 virtual-machine instructions against
-≈ 1 600 for Gauss–Newton (0.33 vs 0.03 ms per solve), plus a denser QP. "regularize" (one Gershgorin shift of the
-whole matrix) is cheaper per iteration but so conservative that every solve hits the cap; "eigen-reflect" needs
-more iterations than "eigen-clip".
-
-Hence the default ``hessian="tiered"``: the Gauss–Newton SQP capped at 6 iterations (a capped iterate is not used),
-then, if it did not converge, the constraint-curvature SQP warm-started from its iterate and multipliers (counted in
-``stats.escalations``), then IPOPT (``stats.retries``). Keep-out slots exist only for buildings taller than the
-planning altitude minus the vertical clearance (no inert rows in every QP when all buildings are flown over).
-Measured (CPU, median of 3 runs each, same load window; the machine's load moves these by ≈ 20 %):
-
-- benchmark problem p50 / p95: constraint-curvature at 830b029 2.08 / 3.22 ms, Gauss–Newton at 830b029 1.73 /
-  2.49 ms, tiered 1.42 / 2.06 ms (quieter window: tiered 1.18 / 1.81–1.99, Gauss–Newton 1.27 / 1.95–2.14,
-  constraint-curvature 1.47 / 2.10 ms, all without inert building rows); 9 of 480 solves escalated;
-- road_standoff (40 s, seeds 2 / 3, both without inert building rows): constraint-curvature IPOPT retries 4 / 3,
-  NMPC CPU 1.10 / 1.26 s, standoff error 17.9, 9.4 / 22.8, 18.1 m, phase error 31.9 / 29.7°; tiered 91 / 93 of 156
-  warm solves escalated, retries 3 / 3, NMPC CPU 1.00 / 1.25 s, standoff error 17.8, 10.0 / 24.1, 18.3 m, phase
-  error 34.2 / 29.9°; no failures, separation unchanged. The Gauss–Newton tier there mostly fails and costs ≈ as
-  much as the clipping it saves.
-
-qrqp stays the QP solver: on the benchmark (tiered) osqp took 1.9 / 3.4 ms, qpOASES (sparse) 14 / 23 ms and DAQP
-55 / 109 ms.
-
-Overheads removed afterwards (same benchmark, same iterates, one process, back to back): a 1.1 ms solve was
-≈ 0.45 ms QPs, ≈ 0.15 ms function evaluations in CasADi's virtual machine (≈ 0.4 ms for the Jacobian alone before
-compiling) and ≈ 0.17 ms converting the six numpy arguments to ``DM``. The fast solvers now load their functions
-compiled to C (:func:`autonomy.guidance.codegen.compiled_nlpsol`, cached on disk; ``NmpcConfig.compiled``) and all
-solvers are called through :class:`autonomy.guidance.codegen.BufferedCall` (no conversion): wall p50 / p95
-1.18 / 2.02 and 1.15 / 1.79 ms uncompiled → 0.81 / 1.31 and 0.82 / 1.34 ms, plans identical to the last bit.
-
-Fatrop (``solver="fatrop"``, :mod:`autonomy.guidance.nmpc_stage`): the same problem in stage-wise order, solved by
-a structure-exploiting interior point with the exact Hessian (Riccati recursion over the stages, compiled functions),
-started from the shifted plan; no tiers. An interior point does not profit from the warm start the way an active-set
-SQP does (≈ 15 iterations p50 whatever ``mu_init``), so on an easy orbit it is slower: benchmark problem p50 / p95
-1.6–2.0 / 2.6–2.8 ms against 0.64–0.71 / 1.05–1.14 ms tiered (same process, back to back). Where the Gauss–Newton tier
-fails it wins: on 481 warm problems captured from ``road_standoff`` (seed 1) its cost matched the tiered plan's
-(median relative difference −1e-8) with no failure. Paired 10-run ``road_standoff`` campaigns (physics car, the
-same run seeds; ``skytrack campaign road_standoff --runs 10``, the tiered arm with
-``--set uavs[i].autonomy.guidance.params={}``), tiered → Fatrop: solve p95 13.8 / 12.8 → 6.5 / 6.6 ms, IPOPT
-retries per run 2.8 / 2.4 → 0.2 / 0.5, autonomy wall time per 120 s run 3.50 → 2.71 s (paired −0.78 ± 0.28 s,
-95 % CI), real-time factor 8.92 → 10.23 (+1.31 ± 0.80); standoff error −1.3 ± 2.9 / −0.1 ± 1.3 m, phase error
-+0.7 ± 4.1°, fused position error −0.23 ± 0.56 m: no change the ten runs resolve.
-``road_standoff`` therefore plans with Fatrop; ``helsinki_chase`` (keep-outs, three UAVs, where the Gauss–Newton tier
-mostly converges) stays tiered: autonomy time 2.75–3.69 s against 3.02–3.52 s per 60 s run over three seeds, a wash.
-Starting Fatrop as the second tier from the capped Gauss–Newton iterate was slower than either (p50 ≈ 10 ms).
-
-A local minimum seen in ``road_standoff`` (physics, stop-and-go car): when the car stops while a UAV flies against
-the orbit direction, the warm-started SQP can keep a slow looping plan (speed floor, heading rate at ±ω_max) that is a
-KKT point (accepted at 0 iterations) while a solve from the vector-field guess reaches a lower cost (seed 2, t = 105 s:
-9691 against 8186). ``NmpcConfig.restart_probe`` re-solves from the vector-field guess whenever the plan rides the
-speed floor on half the horizon and keeps the cheaper plan. Paired 10-run campaigns of ``road_standoff`` (same seeds,
-whole-run mean phase error 23.45° without): probing with IPOPT −4.6 ± 3.5°, with the fast solver −4.0 ± 3.8° (RTF
-7.1 → 4.3), with the fast solver and a 2 s pause after an unused probe −3.3 ± 3.8° (RTF −0.7 ± 0.6); standoff and
-estimation errors unchanged. The benefit is at the edge of ten runs' resolution and costs time, so it is off by
-default.
-
-The slack of the soft constraints is a decision variable scaled by ``slack_l1`` (cost units), so its bound
-multiplier is O(1) and does not inflate the L1-merit penalty of the line search (CasADi sets it from the largest
-multiplier); unused teammate / building slots contribute rows 1 + s ≥ 0 that can never bind, not duplicates of the
-slack's bound. Warm starts shift the previous plan, extend its tail through the model under the last control (a
-dynamically consistent guess) and shift its multipliers with it; after an IPOPT solve only the multipliers of active
-constraints and bounds are kept. Gauss–Newton ignores the curvature of the dynamics; from a cold start far from the
-orbit (e.g. a saturated turn) the SQP then cycles, so a cold start (no plan to shift: the first call and after a
-vector-field fallback) is solved by IPOPT with the exact Hessian (≈ 10–30 ms, rare), whose plan then warm-starts the
-fast solver. A warm solve that still fails is retried once by that IPOPT (``NmpcConfig.robust_retry``).
+Solving. The cost is a sum of squares, so its Gauss–Newton Hessian is positive semi-definite by construction. Warm
+starts (the previous plan shifted by the elapsed steps, its tail rolled out through the model, its multipliers
+shifted with it) go to the ``fast`` :class:`~autonomy.guidance.nmpc_tiers.SolverChain`: by default
+(``hessian="tiered"``) CasADi's ``sqpmethod`` + ``qrqp`` with the Gauss–Newton Hessian under a small iteration cap,
+then, from its iterate, the same SQP with the constraint curvature Σ λ_j ∇²g_j added and clipped positive definite
+(``stats.escalations``); ``solver="fatrop"`` solves the stage-wise form with Fatrop instead
+(:mod:`autonomy.guidance.nmpc_stage`). A cold start (no plan to shift) and a failed warm solve
+(``NmpcConfig.robust_retry``, ``stats.retries``) go to the ``cold`` chain, IPOPT with the exact Hessian, whose plan
+then warm-starts the fast solver. ``NmpcConfig.restart_probe`` re-solves from the vector-field guess when the plan
+rides the speed floor and keeps the cheaper plan. The fast solvers' functions are compiled to C
+(:mod:`autonomy.guidance.codegen`).
 
 Failures (solver status not successful, exception, non-finite output, injected by :meth:`inject_failures`, or a
 time-budget overrun when enforced) never raise: the command comes from the previous successful plan shifted by the
 elapsed time if it is young enough, else from the Lyapunov vector field; both are counted in ``stats``.
+
+Why each of these choices, with the measurements (iterations, solve times, campaigns of ``road_standoff`` and
+``helsinki_chase``): ``docs/nmpc.md``.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from autonomy.guidance.base import Guidance, GuidanceStats
-from autonomy.guidance.codegen import BufferedCall, compiled_nlpsol
+from autonomy.guidance.base import Guidance
+from autonomy.guidance.codegen import BufferedCall
 from autonomy.guidance.keepout import nearby_keepouts
 from autonomy.guidance.nmpc_config import NmpcConfig
-from autonomy.guidance.nmpc_problem import NX as _NX
-from autonomy.guidance.nmpc_problem import NU as _NU
-from autonomy.guidance.nmpc_problem import NmpcProblem, build_problem
-from autonomy.guidance.nmpc_stage import FatropSolver
+from autonomy.guidance.nmpc_layout import NU, NX
+from autonomy.guidance.nmpc_problem import build_problem
+from autonomy.guidance.nmpc_tiers import NmpcStats, SolverChain, build_solvers
 from autonomy.guidance.vector_field import VectorFieldGuidance
 from interfaces.setpoints import UnicycleSetpoint
 from interfaces.state import OwnState, TargetEstimate, TeammateState
 from worlds.geometry import Building
 
 __all__ = ["NmpcStandoffGuidance", "NmpcStats"]
-
-# names CasADi expects of a hess_lag function (checked when the solver loads it from a compiled library)
-_HESS_IO = (["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-_ACCEPT_VIOLATION = 1e-3  # largest constraint violation of an iterate accepted after the iteration cap (m, −)
-
-
-@dataclass(kw_only=True)
-class NmpcStats(GuidanceStats):
-    """:class:`GuidanceStats` plus the solver tiers of ``hessian="tiered"``.
-
-    Attributes
-    ----------
-    escalations : int
-        Warm solves the Gauss–Newton SQP did not finish (failed or capped), handed to the constraint-curvature SQP
-        from its iterate. ``retries`` counts the IPOPT solves after the last SQP tier failed.
-    restart_probes, restarts : int
-        With ``NmpcConfig.restart_probe``: warm solutions that rode the speed floor and were re-solved from the
-        vector-field guess, and how many of those re-solves had the lower cost and replaced the warm plan.
-    """
-
-    escalations: int = 0
-    restart_probes: int = 0
-    restarts: int = 0
-
-    def summary(self) -> dict[str, float]:
-        """:meth:`GuidanceStats.summary` plus ``escalations`` and, with ``restart_probe``, ``restart_probes`` /
-        ``restarts`` (probes solved from the vector-field guess / probes whose plan replaced the warm one)."""
-        return {**super().summary(), "escalations": self.escalations, "restart_probes": self.restart_probes,
-                "restarts": self.restarts}
 
 
 class NmpcStandoffGuidance(Guidance):
@@ -203,7 +97,6 @@ class NmpcStandoffGuidance(Guidance):
         floor = config.planning_altitude - config.building_vertical_clearance
         self._n_bld = min(config.max_buildings, sum(1 for b in self.buildings if b.top_z >= floor))
         self._slack_scale = max(config.weights.slack_l1, 1.0)
-        self.compiled = config.compiled  # cleared when a solver could not be compiled
         self._build()
         self._w0: np.ndarray | None = None
         self._lam_g0: np.ndarray | None = None
@@ -217,71 +110,17 @@ class NmpcStandoffGuidance(Guidance):
 
     # ------------------------------------------------------------------ construction
     def _build(self) -> None:
-        c = self.config
-        pb = build_problem(c, self._n_tm, self._n_bld, self._slack_scale)
+        pb = build_problem(self.config, self._n_tm, self._n_bld, self._slack_scale)
+        self.layout = pb.layout
         self._f_d, self._n_g, self._n_par = pb.f_d, pb.n_g, pb.n_par
         self._lbx, self._ubx, self._lbg, self._ubg = pb.lbx, pb.ubx, pb.lbg, pb.ubg
-        nlp, wvar, P, lam_f, lam_g, H_gn = pb.nlp, pb.nlp["x"], pb.nlp["p"], pb.lam_f, pb.lam_g, pb.H_gn
+        wvar, P = pb.nlp["x"], pb.nlp["p"]
         self._g_fun = BufferedCall(ca.Function("g", [wvar, P], [pb.nlp["g"]], ["x", "p"], ["g"]))
         self._f_fun = BufferedCall(ca.Function("f", [wvar, P], [pb.nlp["f"]], ["x", "p"], ["f"]))
-        if c.solver == "fatrop":  # exact Hessian, stage-wise (see nmpc_stage); no tiers
-            self._solver = self._fatrop(pb)
-            self._curv_solver = None
-        elif c.solver == "ipopt":  # IPOPT takes the upper triangle
-            hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [ca.triu(H_gn)], *_HESS_IO)
-            self._solver = BufferedCall(ca.nlpsol("nmpc", *self._solver_spec(nlp, hess, "gauss_newton")))
-            self._curv_solver = None
-        else:
-            H_cc = pb.curvature_hessian()
-            first = "gauss_newton" if c.hessian == "tiered" else c.hessian
-            H_first = H_gn if first == "gauss_newton" else H_cc
-            hess = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [H_first], *_HESS_IO)
-            self._solver = self._nlpsol("nmpc", *self._solver_spec(nlp, hess, first))
-            self._curv_solver = None  # second tier of "tiered": the constraint-curvature SQP
-            if c.hessian == "tiered":
-                hess_cc = ca.Function("nlp_hess_l", [wvar, P, lam_f, lam_g], [H_cc], *_HESS_IO)
-                self._curv_solver = self._nlpsol("nmpc_curv", *self._solver_spec(nlp, hess_cc, "constraint_curvature"))
-        cold_opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-6,
-                     "ipopt.max_iter": c.cold_start_max_iter}
-        self._cold_solver = BufferedCall(ca.nlpsol("nmpc_cold", "ipopt", nlp, cold_opts))
-
-    def _fatrop(self, pb: NmpcProblem) -> FatropSolver:
-        """Fatrop on the stage-wise form of ``pb`` (:mod:`autonomy.guidance.nmpc_stage`)."""
-        c = self.config
-        solver = FatropSolver("nmpc_fatrop", pb, self._n_tm + self._n_bld,
-                              {"tol": c.fatrop_tol, "max_iter": c.fatrop_max_iter}, compiled=c.compiled)
-        self.compiled = self.compiled and solver.compiled
-        return solver
-
-    def _nlpsol(self, name: str, plugin: str, nlp: dict, opts: dict) -> BufferedCall:
-        """The fast solver ``name``: compiled (:mod:`autonomy.guidance.codegen`) when ``config.compiled``."""
-        if not self.config.compiled:
-            return BufferedCall(ca.nlpsol(name, plugin, nlp, opts))
-        solver, ok = compiled_nlpsol(name, plugin, nlp, opts)
-        self.compiled = self.compiled and ok
-        return BufferedCall(solver)
-
-    def _solver_spec(self, nlp: dict, hess: ca.Function, hessian: str) -> tuple:
-        c = self.config
-        if c.solver == "ipopt":
-            opts = {"hess_lag": hess, "print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                    "ipopt.max_iter": c.max_iter,
-                    "ipopt.warm_start_init_point": "yes", "ipopt.tol": 1e-6, "ipopt.acceptable_tol": 1e-4}
-            return "ipopt", nlp, opts
-        opts = {"qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False,
-                                                   "error_on_fail": False},
-                "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
-                "hess_lag": hess, "max_iter": self._max_iter(hessian),
-                "tol_pr": 1e-5, "tol_du": 1e-2, "error_on_fail": False}
-        if hessian == "constraint_curvature":
-            opts.update(convexify_strategy=c.convexify, convexify_margin=c.convexify_margin)
-        return "sqpmethod", nlp, opts
-
-    def _max_iter(self, hessian: str) -> int:
-        c = self.config
-        if c.solver == "rti":
-            return 1
-        return c.gauss_newton_max_iter if c.hessian == "tiered" and hessian == "gauss_newton" else c.max_iter
+        solvers = build_solvers(self.config, pb, self._n_tm + self._n_bld)
+        self.fast: SolverChain = solvers.fast  # warm starts (:mod:`autonomy.guidance.nmpc_tiers`)
+        self.cold: SolverChain = solvers.cold  # cold starts and robust retries
+        self.compiled = solvers.compiled  # False when a solver that should be compiled could not be
 
     # ------------------------------------------------------------------ public API
     def inject_failures(self, count: int = 1) -> None:
@@ -363,24 +202,17 @@ class NmpcStandoffGuidance(Guidance):
         c = self.config
         n = c.horizon
         tk = t + c.dt * np.arange(1, n + 1)
-        parts = [x0, target.predict_xy(t), target.v_W[:2]]
-        team = sorted(teammates, key=lambda tm: tm.id)[: self._n_tm]
-        for tm in team:
+        mates = []
+        for tm in sorted(teammates, key=lambda tm: tm.id)[: self._n_tm]:
             phi = c.direction * (tm.slot - self.slot) * c.separation
-            parts.append([1.0, np.cos(phi), np.sin(phi)])
-            parts.append(tm.predict_xy(tk).T.reshape(-1, order="F"))
-        for _ in range(self._n_tm - len(team)):
-            parts.append([0.0, 1.0, 0.0])
-            parts.append(np.full(2 * n, 1e6))
+            mates.append((np.cos(phi), np.sin(phi), tm.predict_xy(tk)))
+        kos = []
         if self._n_bld > 0:
             reach = (c.nominal_speed + c.speed_deviation) * c.dt * n + c.separation_distance
-            kos = nearby_keepouts(self.buildings, own.p_W, c.planning_altitude, reach, c.building_margin,
-                                  c.building_vertical_clearance, self._n_bld)
-            for e in kos:
-                parts.append(np.concatenate([[1.0], e.params()]))
-            for _ in range(self._n_bld - len(kos)):
-                parts.append([0.0, 1e6, 1e6, 1.0, 0.0, 1.0, 1.0])
-        return np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts])
+            kos = [e.params() for e in nearby_keepouts(self.buildings, own.p_W, c.planning_altitude, reach,
+                                                       c.building_margin, c.building_vertical_clearance, self._n_bld)]
+        return self.layout.pack(x0=x0, target_position=target.predict_xy(t), target_velocity=target.v_W[:2],
+                                teammates=mates, keepouts=kos)
 
     def _initial_guess(self, x0: np.ndarray, t: float, target: TargetEstimate,
                        teammates: Sequence[TeammateState], fresh: bool = False) -> np.ndarray:
@@ -424,7 +256,7 @@ class NmpcStandoffGuidance(Guidance):
             return np.vstack([a[shift:], np.repeat(a[-1:], shift, axis=0)]).reshape(-1)
 
         lx = self._lam_x0
-        lam_x = np.concatenate([sh(lx[:_NX * n]), sh(lx[_NX * n:(_NX + _NU) * n]), sh(lx[(_NX + _NU) * n:])])
+        lam_x = np.concatenate([sh(lx[:NX * n]), sh(lx[NX * n:(NX + NU) * n]), sh(lx[(NX + NU) * n:])])
         return sh(self._lam_g0), lam_x
 
     def _active_multipliers(self, w: np.ndarray, gv: np.ndarray, lam_g: np.ndarray,
@@ -442,7 +274,7 @@ class NmpcStandoffGuidance(Guidance):
         n = self.config.horizon
         w = np.array(w0, dtype=float)
         w[-n:] = 0.0
-        gv = self._g_fun(x=w, p=par)["g"].reshape(n, -1)[:, _NX:]
+        gv = self._g_fun(x=w, p=par)["g"].reshape(n, -1)[:, NX:]
         if gv.shape[1] == 0:
             return np.zeros(n)
         return self._slack_scale * np.maximum(0.0, -gv.min(axis=1))
@@ -462,54 +294,25 @@ class NmpcStandoffGuidance(Guidance):
         if self._lam_g0 is not None and shift is not None and not robust:
             args["lam_g0"], args["lam_x0"] = self._shifted_multipliers(shift)
         # a cold start (no plan to shift) goes to the robust exact-Hessian IPOPT, warm starts to the fast solver
-        solver = self._cold_solver if self._w0 is None or robust else self._solver
-        tiered = solver is self._solver and self._curv_solver is not None
+        chain = self.cold if self._w0 is None or robust else self.fast
         c0 = time.thread_time()
-        ok, t_solve, status, sol = self._attempt(solver, args, accept_capped=solver is self._solver and not tiered)
-        if not ok and tiered:  # second tier: the constraint-curvature SQP from the Gauss-Newton iterate
-            self.stats.escalations += 1
-            if sol is not None and np.all(np.isfinite(np.asarray(sol["x"]))):
-                args = dict(args, x0=sol["x"], lam_g0=sol["lam_g"], lam_x0=sol["lam_x"])
-            solver = self._curv_solver
-            ok, t_curv, status, sol = self._attempt(solver, args, accept_capped=True)
-            t_solve += t_curv
+        att = chain.solve(args, self._lbg, self._ubg, self.stats)
         self.stats.solve_cpu_times_s.append(time.thread_time() - c0)
-        if not ok:
-            return False, t_solve, status
+        if not att.ok:
+            return False, att.wall_s, att.status
+        sol = att.sol
         w = np.asarray(sol["x"]).reshape(-1)
-        X = w[: _NX * n].reshape(n, _NX)
-        U = w[_NX * n: _NX * n + _NU * n].reshape(n, _NU)
+        X = w[: NX * n].reshape(n, NX)
+        U = w[NX * n: NX * n + NU * n].reshape(n, NU)
         self._plan_x = np.vstack([x0, X])
         self._plan_u = U
         self._w0 = w
         self._lam_g0 = np.asarray(sol["lam_g"]).reshape(-1)
         self._lam_x0 = np.asarray(sol["lam_x"]).reshape(-1)
-        if solver is self._cold_solver:
+        if att.tier.keep_active_multipliers:
             self._lam_g0, self._lam_x0 = self._active_multipliers(w, np.asarray(sol["g"]).reshape(-1), self._lam_g0,
                                                                   self._lam_x0)
-        return True, t_solve, status
-
-    def _attempt(self, solver: BufferedCall, args: dict, accept_capped: bool) -> tuple[bool, float, str, dict | None]:
-        """One optimiser call: (success, wall time (s), status, solution or ``None`` after an exception). With
-        ``accept_capped`` an iterate stopped by the iteration cap that satisfies all constraints within
-        ``_ACCEPT_VIOLATION`` counts as a success (``stats.inexact``); RTI always ends there."""
-        t0 = time.perf_counter()
-        try:
-            sol = solver(**args)
-            st = solver.stats()
-        except RuntimeError as exc:  # CasADi raises RuntimeError on evaluation errors
-            return False, time.perf_counter() - t0, f"exception: {exc}", None
-        t_solve = time.perf_counter() - t0
-        status = str(st.get("return_status", ""))
-        self.stats.iterations.append(int(st.get("iter_count", -1)))
-        ok = bool(st.get("success", False))
-        if not ok and accept_capped and status.strip() == "Maximum_Iterations_Exceeded":
-            gv = np.asarray(sol["g"]).reshape(-1)
-            viol = max(float(np.max(self._lbg - gv, initial=0.0)), float(np.max(gv - self._ubg, initial=0.0)))
-            ok = self.config.solver == "rti" or viol <= _ACCEPT_VIOLATION
-            if ok and self.config.solver != "rti":
-                self.stats.inexact += 1
-        return ok and bool(np.all(np.isfinite(np.asarray(sol["x"])))), t_solve, status, sol
+        return True, att.wall_s, att.status
 
     def _stalled(self) -> bool:
         """The plan rides the speed floor on at least half of the horizon: the signature of the slow looping local

@@ -95,16 +95,16 @@ class NmpcConfig:
     altitude, min_altitude, max_altitude : float
         Planning altitude and the band it is clamped to (m); the plan is 2-D at the clamped altitude.
     solver : {"sqp", "fatrop", "ipopt", "rti"}
-        "sqp": CasADi sqpmethod + qrqp with the ``hessian`` below (see :mod:`autonomy.guidance.nmpc`); "fatrop": the
-        structure-exploiting interior point Fatrop with the exact Hessian on the stage-wise problem
+        "sqp": CasADi sqpmethod + qrqp with the ``hessian`` below (see :mod:`autonomy.guidance.nmpc_tiers`);
+        "fatrop": the structure-exploiting interior point Fatrop with the exact Hessian on the stage-wise problem
         (:mod:`autonomy.guidance.nmpc_stage`); "ipopt": interior point, warm-started; "rti": one SQP iteration per
         call (real-time iteration).
     hessian : {"tiered", "gauss_newton", "constraint_curvature"}
         Hessian of the fast solver's QPs: "gauss_newton" σ J_Rᵀ J_R of the least-squares cost only;
         "constraint_curvature" adds the exact curvature Σ λ_j ∇²g_j of the dynamics and constraints, made positive
         definite block by block (``convexify``); "tiered" (default) runs the Gauss–Newton SQP with the cap
-        ``gauss_newton_max_iter`` and, when it does not converge, the constraint-curvature SQP from its iterate (see
-        :mod:`autonomy.guidance.nmpc` for the measured effect).
+        ``gauss_newton_max_iter`` and, when it does not converge, the constraint-curvature SQP from its iterate (the
+        tiers are :mod:`autonomy.guidance.nmpc_tiers`; their measured effect is in ``docs/nmpc.md``).
     convexify : {"eigen-clip", "eigen-reflect", "regularize"}
         How sqpmethod makes the constraint-curvature Hessian positive definite (CasADi ``convexify_strategy``):
         clip or reflect the negative eigenvalues of each diagonal block of the Hessian (its strongly connected
@@ -138,7 +138,7 @@ class NmpcConfig:
     restart_probe : bool
         When a warm-started plan rides the speed floor on half the horizon or more, solve again from the vector-field
         guess and keep the cheaper plan (multi-start against the slow looping local minimum after a target stops;
-        counted in ``stats.restart_probes`` / ``stats.restarts``; see :mod:`autonomy.guidance.nmpc`).
+        counted in ``stats.restart_probes`` / ``stats.restarts``; measured in ``docs/nmpc.md``).
     restart_probe_interval_s : float
         After a probe whose plan was not kept, the next probe waits this long (s), >= 0.
     compiled : bool

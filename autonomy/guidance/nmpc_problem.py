@@ -1,12 +1,12 @@
 """The NMPC's optimisation problem, built symbolically with CasADi: decision variables, the least-squares cost with
 its Gauss–Newton Hessian, the dynamics, separation and keep-out constraints, and their bounds.
 
-The formulation (cost terms, phase residuals, soft constraints with the scaled slack) and the reasons for it are in
-:mod:`autonomy.guidance.nmpc`, which builds solvers on this problem. The decision vector is
-``w = (vec(X), vec(U), S)``: the N predicted states (5 each: x, y, heading, speed, heading rate), the N controls
-(speed and heading-rate commands) and the N slacks; the parameter vector ``p`` holds the initial state, the target's
-position and velocity, each teammate's (active, cos φ, sin φ, 2N planned positions) and each keep-out slot's (active,
-centre, cos / sin yaw, inverse semi-axes).
+The formulation (cost terms, phase residuals, soft constraints with the scaled slack) is stated in
+:mod:`autonomy.guidance.nmpc`, which builds solvers on this problem; the reasons for it are in ``docs/nmpc.md``. The
+decision vector is ``w = (vec(X), vec(U), S)``: the N predicted states (5 each: x, y, heading, speed, heading rate),
+the N controls (speed and heading-rate commands) and the N slacks; the parameter vector ``p`` is laid out by
+:class:`autonomy.guidance.nmpc_layout.ParameterLayout` (initial state, target, teammate and keep-out slots), which
+unpacks it here and packs it in the guidance.
 """
 
 from __future__ import annotations
@@ -17,13 +17,11 @@ import casadi as ca
 import numpy as np
 
 from autonomy.guidance.nmpc_config import NmpcConfig
+from autonomy.guidance.nmpc_layout import NU, NX, ParameterLayout
 
 __all__ = ["NX", "NU", "NmpcProblem", "build_problem", "rk4_model"]
 
-NX, NU = 5, 2
 _NX, _NU = NX, NU
-_TM_PAR = 3  # active, cos φ, sin φ (+ 2N positions)
-_B_PAR = 7  # active, cx, cy, cos yaw, sin yaw, 1/α, 1/β
 
 
 def rk4_model(c: NmpcConfig) -> ca.Function:
@@ -60,6 +58,8 @@ class NmpcProblem:
         Symbols of the cost multiplier and the constraint multipliers (for Hessians of the Lagrangian).
     H_gn : casadi.SX
         Gauss–Newton Hessian of the Lagrangian, ``λ_f (J_Rᵀ J_R + 1e-6 I)``.
+    layout : ParameterLayout
+        Layout of the parameter vector ``p``.
     n_par, n_g : int
         Sizes of the parameter vector and of the constraint vector.
     lbx, ubx, lbg, ubg : np.ndarray
@@ -71,6 +71,7 @@ class NmpcProblem:
     lam_f: ca.SX
     lam_g: ca.SX
     H_gn: ca.SX
+    layout: ParameterLayout
     n_par: int
     n_g: int
     lbx: np.ndarray
@@ -85,22 +86,17 @@ class NmpcProblem:
 
 def build_problem(config: NmpcConfig, n_teammates: int, n_buildings: int, slack_scale: float) -> NmpcProblem:
     """The problem for ``n_teammates`` teammate slots and ``n_buildings`` keep-out slots, with the slack decision
-    variable scaled by ``slack_scale`` (cost units; see :mod:`autonomy.guidance.nmpc`)."""
+    variable scaled by ``slack_scale`` (cost units; see ``docs/nmpc.md``)."""
     c, w = config, config.weights
     n, m, nb = c.horizon, n_teammates, n_buildings
     f_d = rk4_model(c)
-    n_par = _NX + 4 + m * (_TM_PAR + 2 * n) + nb * _B_PAR
+    layout = ParameterLayout(n, m, nb)
+    n_par = layout.size
     P = ca.SX.sym("p", n_par)
     X = ca.SX.sym("X", _NX, n)
     U = ca.SX.sym("U", _NU, n)
     S = ca.SX.sym("S", n)
-    x0, pt0, vt = P[0:_NX], P[_NX:_NX + 2], P[_NX + 2:_NX + 4]
-    off = _NX + 4
-    tms = []
-    for _ in range(m):
-        tms.append((P[off], P[off + 1], P[off + 2], ca.reshape(P[off + 3:off + 3 + 2 * n], 2, n)))
-        off += _TM_PAR + 2 * n
-    bls = [P[off + i * _B_PAR: off + (i + 1) * _B_PAR] for i in range(nb)]
+    x0, pt0, vt, tms, bls = layout.unpack(P)
     Sk = S / slack_scale  # the slack in constraint units; the decision variable is slack_scale times it
     rd2 = c.standoff_radius ** 2
     vmax, wmax = c.speed_deviation, c.max_heading_rate
@@ -121,7 +117,7 @@ def build_problem(config: NmpcConfig, n_teammates: int, n_buildings: int, slack_
         res.append(np.sqrt(qr) * rt)
         if m > 0:
             u_me = r / ca.sqrt(rr + 1.0)
-            n_act = sum(tm[0] for tm in tms)
+            n_act = sum(tm.active for tm in tms)
             scale = np.sqrt(qd) / ca.sqrt(ca.fmax(n_act, 1))
             for act, cph, sph, Q in tms:
                 rj = Q[:, k] - pt
@@ -161,5 +157,5 @@ def build_problem(config: NmpcConfig, n_teammates: int, n_buildings: int, slack_
         eq_mask[row:row + _NX] = True
         row += _NX + m + nb
     return NmpcProblem(nlp={"x": wvar, "p": P, "f": J, "g": g_all}, f_d=f_d, lam_f=lam_f, lam_g=lam_g,
-                       H_gn=H_gn, n_par=n_par, n_g=n_g, lbx=lbx, ubx=ubx, lbg=np.zeros(n_g),
+                       H_gn=H_gn, layout=layout, n_par=n_par, n_g=n_g, lbx=lbx, ubx=ubx, lbg=np.zeros(n_g),
                        ubg=np.where(eq_mask, 0.0, inf))

@@ -15,7 +15,7 @@ starts, plans and multipliers in the by-kind layout, and :class:`FatropSolver` t
 :class:`autonomy.guidance.nmpc.NmpcStandoffGuidance` it is one more solver of the same problem.
 
 Fatrop uses the exact Hessian of the Lagrangian (the constraint curvature the Gauss–Newton SQP misses, see
-:mod:`autonomy.guidance.nmpc`), is started from the shifted plan and needs no escalation tiers. Its functions are
+``docs/nmpc.md``), is started from the shifted plan and needs no escalation tiers. Its functions are
 compiled like the SQP's (:func:`autonomy.guidance.codegen.compiled_nlpsol`).
 """
 
@@ -97,7 +97,7 @@ class FatropSolver:
     name : str
         Solver name (and compiled library prefix).
     problem : NmpcProblem
-        The by-kind problem; ``x0`` is read from ``p[0:5]`` at each call.
+        The by-kind problem; ``x0`` is read from ``p`` (its ``layout.x0``) at each call.
     n_path : int
         Path rows per step (teammate separation and keep-out slots).
     opts : dict
@@ -113,7 +113,8 @@ class FatropSolver:
         wk, P = problem.nlp["x"], problem.nlp["p"]
         W = ca.SX.sym("w", lay.n_w)
         # by-kind variables and the initial state as expressions of the stage-wise ones
-        f, g = ca.substitute([problem.nlp["f"], problem.nlp["g"]], [wk, P[0:NX]],
+        self._x0 = problem.layout.x0  # the initial state's entries of p
+        f, g = ca.substitute([problem.nlp["f"], problem.nlp["g"]], [wk, P[self._x0]],
                              [W[self._kind_idx], W[lay.z(0):lay.z(0) + NX]])
         rows = [g[int(r)] if r >= 0 else None for r in self._g_idx]
         slack_rows = iter(W[lay.z(k + 1) + NX] - W[lay.v(k) + NU] for k in range(n))
@@ -149,7 +150,7 @@ class FatropSolver:
         slack rows, ``lam_x`` of the slack from its bound on the state). Fatrop starts from the primal guess alone
         (it does not use multiplier guesses), so ``lam_g0`` / ``lam_x0`` are accepted, like the SQP's, and dropped."""
         p = np.asarray(p, dtype=float).reshape(-1)
-        xi = np.concatenate([p[0:NX], [0.0]])
+        xi = np.concatenate([p[self._x0], [0.0]])
         lbx_s, ubx_s = self._to_stage(lbx, xi), self._to_stage(ubx, xi)
         # the slack's bound holds on the state s_{k+1} only: bounding σ_k = s_{k+1} too would make the two active
         # bounds linearly dependent with the gap row, and the barrier would split the multiplier between them

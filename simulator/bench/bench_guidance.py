@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.nmpc import NmpcStandoffGuidance
 from autonomy.guidance.nmpc_config import NmpcConfig
 from autonomy.guidance.unicycle import UnicycleParams
 from simulator.bench.registry import BenchRecord, benchmark
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 
 _WARMUP = 10
 _REPEATS = 3
@@ -88,10 +88,10 @@ def bench_fast_mpc() -> list[BenchRecord]:
 
 @benchmark("paper000_loop", produces=("fast_mpc_scif_hcmci_step_ms_p50",))
 def bench_paper000_loop() -> list[BenchRecord]:
-    """Paper 000's whole per-UAV step in its closed loop (:mod:`autonomy.guidance.consensus_loop`, case 1, 4 UAVs):
+    """Paper 000's whole per-UAV step in its closed loop (:mod:`simulator.kinematic.consensus`, case 1, 4 UAVs):
     one fast MPC solve, one SCIF information step and a quarter of the 4-node HCMCI (L = 3); median over 100 steps
     after a 10-step warm-up, median of 3 runs. Target 2 ms (the paper's MATLAB: ≈ 39 ms)."""
-    from autonomy.guidance.consensus_loop import ConsensusLoopConfig, run_consensus_loop
+    from simulator.kinematic.consensus import ConsensusLoopConfig, run_consensus_loop
 
     meds = []
     for seed in range(_REPEATS):

@@ -1,6 +1,6 @@
 """Set-membership search benchmarks (Ibenenthal et al.): one team step and a whole decoy mission.
 
-The scenario is the paper's section V (:class:`~autonomy.guidance.search.mission.MissionConfig` defaults): a
+The scenario is the paper's section V (:class:`~simulator.kinematic.search_mission.MissionConfig` defaults): a
 500 m x 500 m area, 5 random cuboid obstacles 30-70 m wide and 100 m tall, 2 targets and 2 decoys at 5 km/h,
 4 UAVs at 100 m and 60 km/h with the 45 deg box sensor, T = 1 s.
 
@@ -23,8 +23,8 @@ import time
 
 import numpy as np
 
-from autonomy.guidance.search.mission import MissionConfig, SearchMission, line_of_sight_graph
 from simulator.bench.registry import BenchRecord, benchmark
+from simulator.kinematic.search_mission import MissionConfig, SearchMission, line_of_sight_graph
 
 WARMUP_STEPS = 40
 TIMED_STEPS = 30

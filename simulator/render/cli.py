@@ -47,7 +47,7 @@ def render_config_from_args(args: argparse.Namespace, out: Path | None, world_re
 
 
 def _render(args: argparse.Namespace) -> int:
-    from simulator.render.replay import render_run
+    from simulator.render.video import render_run
 
     run_dir = Path(args.run_dir)
     if not (run_dir / "run.json").exists() and not (run_dir / "timeseries").is_dir():

@@ -1,4 +1,4 @@
-"""Replaying a recorded run directory as an MP4 video: ``render_run(run_dir, RenderConfig(...)) -> Path``.
+"""Rendering the frames of a recorded run directory (:func:`simulator.render.video.render_run` encodes them).
 
 Per video frame (at ``fps``, not at the physics rate): interpolate the recorded truth to the frame time, pose the
 stage's bodies, move each panel's camera, render, scale to the panel size, draw the overlays and encode. A ``split``
@@ -7,38 +7,31 @@ frame is a chase view (left half) beside a top-down map (right half); every othe
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Iterator
 import logging
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
-import yaml
-from tqdm import tqdm
 
 from simulator.render.cameras import CameraInputs, CameraRig, ChaseCamera, OnboardCamera, OrbitCamera, TopDownCamera
 from simulator.render.config import RenderConfig
-from simulator.render.encode import VideoEncoder
 from simulator.render.overlays import (LEGEND, SEARCH_LEGEND, EstimateMark, GroundRegion, OverlayFrame, draw_hud,
                                        draw_overlays)
 from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
 from simulator.render.timeline import Timeline
 from simulator.render.world_marks import RadioLinks, radar_regards
+from simulator.render.world_view import ReplayWorld, read_world
 from simulator.runrecord import load_run, load_search_sets
-from simulator.stdio import quiet_c_stdout
 
-__all__ = ["Panel", "RenderedFrame", "Replayer", "render_run"]
+__all__ = ["Panel", "RenderedFrame", "Replayer"]
 
 log = logging.getLogger(__name__)
 
-_STANDOFF_GUIDANCE = ("vector_field", "nmpc", "plugin")
-_DEFAULT_CAR = (4.77, 1.83, 1.47)  # m, the sedan's body (vehicles/cars/sedan.py)
-_DEFAULT_ARM = 0.25  # m, a 500 mm-class quadrotor (vehicles/airframes/survey_quad.py)
 _TOPDOWN_MARGIN = 0.08  # fraction of the framed area added on each side
 _X_RGB, _X_ALPHA = (0.85, 0.1, 0.1), 0.45  # the search's sets, as in plots/search.png
 _XBAR_RGB, _XBAR_ALPHA = (0.2, 0.45, 0.9), 0.3
@@ -65,40 +58,6 @@ class RenderedFrame:
     panels: list[Panel]
 
 
-def _world_dict(run_dir: Path) -> dict[str, Any]:
-    """The resolved world of a run directory as a plain mapping (validated through the loader when it can be)."""
-    path = run_dir / "world.yaml"
-    if not path.exists():
-        return {}
-    try:
-        from worlds.loader import load_world
-
-        return dict(load_world(path).raw)
-    except Exception as exc:  # noqa: BLE001 - an older or newer schema must not stop a replay
-        warnings.warn(f"{path} does not validate against the current schema ({exc}); reading it as plain YAML",
-                      stacklevel=3)
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-        return data if isinstance(data, dict) else {}
-
-
-def _car_size(kind: str) -> tuple[float, float, float]:
-    try:
-        params = importlib.import_module(f"vehicles.cars.{kind}").PARAMS
-        return float(params.length), float(params.width), float(params.height)
-    except (ImportError, AttributeError):
-        return _DEFAULT_CAR
-
-
-def _arm_length(airframe: str | None) -> float:
-    """Rotor arm length of the named airframe, m (that of a 500 mm-class frame if it cannot be loaded)."""
-    try:
-        from vehicles.quadrotor.airframes import load_airframe
-
-        return float(load_airframe(str(airframe)).arm_length)
-    except Exception:  # noqa: BLE001 - an unknown or renamed airframe only changes how big the UAVs are drawn
-        return _DEFAULT_ARM
-
-
 class Replayer:
     """Renders frames of a recorded run.
 
@@ -119,41 +78,30 @@ class Replayer:
         world_name, seed = rec.run.get("world"), rec.run.get("seed")
         self.title = f"{world_name} (seed {seed})" if world_name is not None else self.run_dir.name
         self.timeline = tl = Timeline(rec.streams)
-        world = _world_dict(self.run_dir)
-        uavs = world.get("uavs") or []
+        self.world = world = ReplayWorld(read_world(self.run_dir))
         self.uav_index = sorted(tl.uavs)
         self.vehicle_index = sorted(tl.vehicles)
-        self.uav_names = {u: (uavs[u].get("id") if u < len(uavs) else None) or f"uav{u}" for u in self.uav_index}
-        self.standoff: dict[int, float | None] = {}
-        for u in self.uav_index:
-            g = (uavs[u].get("autonomy") or {}).get("guidance") or {} if u < len(uavs) else {}
-            ok = g.get("type") in _STANDOFF_GUIDANCE and g.get("standoff_m") is not None
-            self.standoff[u] = float(g["standoff_m"]) if ok else None
+        self.uav_names = {u: world.uav_name(u) for u in self.uav_index}
+        self.standoff: dict[int, float | None] = {u: world.standoff(u) for u in self.uav_index}
         target = cfg.target if cfg.target is not None else int(rec.metrics.get("target_index") or 0)
         self.target: int | None = target if target in tl.vehicles else (self.vehicle_index or [None])[0]
         if cfg.uav not in tl.uavs:
             raise ValueError(f"RenderConfig.uav = {cfg.uav}: the run has UAVs {self.uav_index}")
-        gv = world.get("ground_vehicles") or []
-        sizes = [cfg.car_size or _car_size(str(gv[v].get("type", "sedan")) if v < len(gv) else "sedan")
-                 for v in self.vehicle_index]
         self.geometry = load_geometry(self.run_dir / "geometry.npz")
-        self.uav_span = 2.0 * _arm_length(uavs[0].get("airframe") if uavs else None) * cfg.uav_scale  # tip to tip, m
-        self._sizes = sizes
-        self._decoys = [(_car_size("sedan"), d["position"], np.radians(float(d.get("yaw_deg", 0.0))))
-                        for d in world.get("decoys") or []]
+        self.uav_span = 2.0 * world.uav_arm_length() * cfg.uav_scale  # tip to tip, m
+        self._sizes = [cfg.car_size or world.vehicle_size(v) for v in self.vehicle_index]
+        self._decoys = world.decoys()
         self.layout = self._layout()
         self.stage = self._choose_stage()
-        self.regards = radar_regards(world)
+        self.regards = radar_regards(world.world)
         self._road_index = {rid: k for k, rid in enumerate(self.geometry.road_ids) if rid}
         self.links = self._radio_links()
         self.search_sets = _SearchSets(self.run_dir, cfg.uav, rec.streams.get("search"))
 
     def _radio_links(self) -> RadioLinks | None:
-        """The run's radio model on the stage's buildings, or None (perfect radio, or a world that does not load)."""
+        """The run's radio model on the stage's buildings, or None (perfect radio, or a model that cannot be built)."""
         try:
-            from worlds.loader import load_world
-
-            links = RadioLinks(load_world(self.run_dir / "world.yaml").world, self.geometry.buildings)
+            links = RadioLinks(self.world.world, self.geometry.buildings)
         except Exception as exc:  # noqa: BLE001 - links are a decoration: a replay must not fail for them
             log.info("no radio links drawn: %s", exc)
             return None
@@ -413,28 +361,3 @@ class _SearchSets:
         ts, aX, aXb = self._areas[uav]
         j = int(np.searchsorted(ts, t + 1e-9, side="right")) - 1
         return None if j < 0 else f"X-bar {aXb[j]:.1%}  X {aX[j]:.2%} of the search area"
-
-
-def render_run(run_dir: Path, config: RenderConfig) -> Path:
-    """Render the run directory ``run_dir`` to an MP4 video as ``config`` says; returns the video's path.
-
-    Raises
-    ------
-    FileNotFoundError
-        No run directory at ``run_dir``.
-    ValueError
-        The record has no ``uav_truth`` samples, or ``config.uav`` is not one of its UAVs.
-    """
-    from simulator.render.parallel import iter_frames
-
-    run_dir = Path(run_dir)
-    out = Path(config.out) if config.out is not None else run_dir / "video.mp4"
-    with quiet_c_stdout():  # the EGL plugin prints GL banners on descriptor 1 while it renders and closes
-        n, frames = iter_frames(run_dir, config)
-        try:
-            with VideoEncoder(out, config.width, config.height, config.fps, config.crf, config.preset) as enc:
-                for rgb in tqdm(frames, total=n, unit="frame", desc=f"render {out.name}", disable=not config.progress):
-                    enc.write(rgb)
-        finally:
-            frames.close()  # closes the PyBullet clients inside the quiet block
-    return out

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from worlds.schema import FovSpec, World
+
 __all__ = ["RegardOutline", "radar_regards", "RadioLinks", "probability_rgb"]
 
 _ARC_POINTS = 48
@@ -47,18 +49,18 @@ class RegardOutline:
         return np.c_[xy, np.full(len(xy), z)]
 
 
-def radar_regards(world: dict[str, Any]) -> list[RegardOutline]:
-    """The fields of regard of every radar with a maximum range in a world mapping (the resolved world file)."""
+def radar_regards(world: World) -> list[RegardOutline]:
+    """The fields of regard of every radar with a maximum range in the (validated) world."""
     out = []
-    for u, spec in enumerate(world.get("uavs") or []):
-        for s in spec.get("sensors") or []:
-            if s.get("type") != "radar" or s.get("max_range") is None:
+    for u, spec in enumerate(world.uavs):
+        for s in spec.sensors:
+            if s.type != "radar" or s.max_range is None:
                 continue
-            fov = s.get("fov") or {}
-            lim = fov.get("azimuth_limits_deg", (-180.0, 180.0))
-            out.append(RegardOutline(uav=u, frame=str(fov.get("frame", "all_round")),
+            fov = s.fov if s.fov is not None else FovSpec()
+            lim = fov.azimuth_limits_deg
+            out.append(RegardOutline(uav=u, frame=str(fov.frame),
                                      azimuth_limits=(float(np.deg2rad(lim[0])), float(np.deg2rad(lim[1]))),
-                                     max_range=float(s["max_range"])))
+                                     max_range=float(s.max_range)))
     return out
 
 
@@ -73,13 +75,13 @@ class RadioLinks:
 
     Parameters
     ----------
-    world : object
-        The run's validated world (:class:`worlds.schema.World`).
+    world : World
+        The run's validated world.
     buildings : sequence of Building
         The run's buildings (``geometry.npz``); they block links when the world says so.
     """
 
-    def __init__(self, world: Any, buildings: Any) -> None:
+    def __init__(self, world: World, buildings: Any) -> None:
         from autonomy.sensing.fake_scene import FakeScene
         from simulator.factories import build_channel
 

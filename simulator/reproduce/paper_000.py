@@ -1,16 +1,15 @@
 """Reproduction of paper 000 (Hu et al. 2018): SCIF + HCMCI consensus + fast MPC, cases 1 and 2.
 
-Runs the kinematic closed loop :mod:`autonomy.guidance.consensus_loop` ``ctx.runs`` times per case (the paper ran each
+Runs the kinematic closed loop :mod:`simulator.kinematic.consensus` ``ctx.runs`` times per case (the paper ran each
 case once; its results are qualitative and shown in figures only), and, as a cross-check on PyBullet quadrotors, a
 campaign of the physics world ``consensus_fmpc`` per case (case 2 adds the paper's two link outages).
 """
 
 from __future__ import annotations
 
-
 import numpy as np
 
-from autonomy.guidance.consensus_loop import ConsensusLoopConfig, ConsensusLoopResult, run_consensus_loop
+from simulator.kinematic.consensus import ConsensusLoopConfig, ConsensusLoopResult, run_consensus_loop
 from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
 
 __all__ = ["reproduce"]
@@ -257,7 +256,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         title="Decentralized estimation and tracking with SCIF, HCMCI and fast MPC (Hu et al., IEEE Access 2018)",
         runs=ctx.runs,
         setup=f"""
-Kinematic closed loop (`autonomy/guidance/consensus_loop.py`): four unicycle UAVs (T = {cfg.dt} s, 0 ≤ v ≤
+Kinematic closed loop (`simulator/kinematic/consensus.py`): four unicycle UAVs (T = {cfg.dt} s, 0 ≤ v ≤
 {cfg.mpc.v_max:g} m/s, |ω| ≤ {cfg.mpc.omega_max:g} rad/s) at {cfg.altitudes} m from {cfg.initial}; nadir-angle
 radars with the printed R_j (read as variances); one SCIF per UAV on the Euler Singer model (α = {cfg.singer_alpha},
 σa = {cfg.singer_sigma_a}); HCMCI with Metropolis weights, L = {cfg.consensus_iterations}, b = "safe" over the ring

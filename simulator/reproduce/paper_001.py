@@ -1,6 +1,6 @@
 """Reproduction of paper 001 (Liu, Fu & Gao 2018): co-optimised communication and sensing.
 
-The UAVs fly the closed loop :mod:`autonomy.guidance.infoplan.closed_loop` (the planner sees the true target, so the
+The UAVs fly the closed loop :mod:`simulator.kinematic.infoplan` (the planner sees the true target, so the
 flight isolates the guidance). On the flown paths the estimation is then run as the paper does it: each UAV measures
 range and azimuth (δr = 2 m, δθ = 0.05 rad) and runs its own extended information filter (an EKF on the CV model), and
 sends its measurement information along its route; the base station adds the packets that arrive (Bernoulli with the
@@ -21,8 +21,8 @@ from autonomy.estimation.factory import make_filter
 from autonomy.estimation.measurements import Measurement
 from autonomy.estimation.models import ConstantVelocity
 from autonomy.fusion.base_station import BaseStationFusion, information_contribution
-from autonomy.guidance.infoplan.closed_loop import InfoLoopConfig, InfoLoopResult, run_info_loop
 from autonomy.guidance.infoplan.config import InfoPlannerConfig
+from simulator.kinematic.infoplan import InfoLoopConfig, InfoLoopResult, run_info_loop
 from simulator.reproduce.paper_001_physics import (CHAIN4, PAPER4_A3_DIRECT, PAPER4_BETA, PAPER4_ERRORS, WORLD,
                                                    pattern_switches, physics_cross_check, relay_patterns)
 from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
@@ -339,7 +339,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         title="Co-optimization of communication and sensing for multiple UAVs (Liu, Fu & Gao, Appl. Sci. 2018)",
         runs=ctx.runs,
         setup=f"""
-Kinematic closed loop (`autonomy/guidance/infoplan/closed_loop.py`): UAVs at 50 m/s with |χ̇| ≤ 30°/s plan every
+Kinematic closed loop (`simulator/kinematic/infoplan.py`): UAVs at 50 m/s with |χ̇| ≤ 30°/s plan every
 1 s over T_p = 3 steps (7 heading rates per step, sequential search in the MST hierarchy, 2 sweeps, log-det criterion)
 the information they deliver to the base B over the minimum spanning tree of links with Pr(d) = exp(−(d/1000 m)³);
 packets arrive with the route probability β. Estimation on the flown paths as in the module docstring. Target at

@@ -1,6 +1,6 @@
 """Reproduction of paper 003 (Yang & Wang 2019): FIM-optimal formation with IMM bearings-only tracking.
 
-Runs the kinematic closed loop :mod:`autonomy.guidance.formation.closed_loop` for the paper's four cases, with the
+Runs the kinematic closed loop :mod:`simulator.kinematic.formation` for the paper's four cases, with the
 FIM-optimal formation (Algorithm 1 + Jacobi PD control) and two formations that are not optimised (the start geometry
 held, and a fan trailing the target), ``ctx.runs`` seeded runs each. The paper has no tables: its claims are
 qualitative (error levels per case, growth at manoeuvres until the IMM switches) and it never compares against a
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from autonomy.guidance.formation.closed_loop import CASES, FormationLoopConfig, FormationLoopResult, run_formation_loop
+from simulator.kinematic.formation import CASES, FormationLoopConfig, FormationLoopResult, run_formation_loop
 from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
 
 __all__ = ["reproduce"]
@@ -351,7 +351,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         paper="003", title="FIM-optimal formation and IMM bearings-only tracking (Yang & Wang, IEEE Access 2019)",
         runs=ctx.runs,
         setup=f"""
-Kinematic closed loop (`autonomy/guidance/formation/closed_loop.py`): three agents with bearing sensors
+Kinematic closed loop (`simulator/kinematic/formation.py`): three agents with bearing sensors
 (σ = {base.sigma_bearing} rad) every {base.dt} s; an IMM of three EKFs (CV, CT ±{base.turn_rate} rad/s, q = {base.q_cv}
 m²/s³, p_stay = {base.p_stay}) on the stacked bearings (the paper's centralised augmented-measurement EKF per mode); the
 team flies Algorithm 1's geometry around the estimate with the Jacobi PD law (velocity-tracking agents, ≤

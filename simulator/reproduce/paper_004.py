@@ -1,6 +1,6 @@
 """Reproduction of paper 004 (Ibenenthal et al.): set-membership search and tracking with decoys and obstacles.
 
-Runs the kinematic mission :mod:`autonomy.guidance.search.mission` (the paper's section V: 500 m × 500 m, 5 random
+Runs the kinematic mission :mod:`simulator.kinematic.search_mission` (the paper's section V: 500 m × 500 m, 5 random
 cuboid obstacles, 2 targets, 2 decoys, 4 UAVs, 400 steps of 1 s) ``ctx.runs`` times with the sequential search MPC
 and, as a baseline, with random turns, each run's world drawn from its own seed. The search MPC runs with the
 safe-loiter constraint that makes obstacle clearance hold by construction (beyond the paper,
@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.guidance.search.mission import MissionConfig, MissionResult, SearchMission
 from autonomy.sensing.box_sensor import BoxSensorConfig
+from simulator.kinematic.search_mission import MissionConfig, MissionResult, SearchMission
 from simulator.reproduce.paper_004_physics import WORLD, physics_cross_check
 from simulator.reproduce.report import Figure, Finding, PaperReport, ReproContext, Table, mean_ci
 
@@ -302,7 +302,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
         paper="004", title="Target search and tracking in presence of decoys and obstacles (Ibenenthal et al.)",
         runs=n,
         setup=f"""
-Kinematic mission (`autonomy/guidance/search/mission.py`): {cfg.n_uavs} UAVs at {s_cfg.speed * 3.6:.0f} km/h, turn
+Kinematic mission (`simulator/kinematic/search_mission.py`): {cfg.n_uavs} UAVs at {s_cfg.speed * 3.6:.0f} km/h, turn
 bound ±{np.degrees(s_cfg.max_turn):.0f}° per step, T = {s_cfg.dt:g} s, {cfg.steps} steps; nadir box sensors (π/4
 opening, 82.8 m footprint at 100 m, ±5 m bounded error) with obstacle shadows; {cfg.n_targets} targets and
 {cfg.n_decoys} decoys at 5 km/h with random heading changes in [−π/5, π/5]; {cfg.n_obstacles} cuboid obstacles

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from autonomy.guidance.fast_mpc import FastMpcConfig, FastMpcGuidance, build_fast_mpc_qp
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.pdip import PdipOptions, solve_qp_pdip
 from autonomy.guidance.unicycle import UnicycleParams
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 
 
 def _reference_cost(qp):

@@ -4,17 +4,16 @@ and scenario 1 in closed loop on kinematic unicycles (paper speeds: 50 m/s, 30°
 import numpy as np
 import pytest
 
-from autonomy.guidance.infoplan.closed_loop import InfoLoopConfig, fuse_at_base, run_info_loop
 from autonomy.guidance.infoplan.config import InfoPlannerConfig
 from autonomy.guidance.infoplan.guidance import InfoPlannerGuidance
 from autonomy.guidance.infoplan.information import radar_information
 from autonomy.guidance.infoplan.planner import TeamInfoPlanner, arc_paths
-from autonomy.guidance.infoplan.routing import (chain_route_probabilities, link_probabilities,
-                                                mst_route_probabilities)
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
+from autonomy.guidance.infoplan.routing import chain_route_probabilities, link_probabilities, mst_route_probabilities
 from autonomy.guidance.unicycle import UnicycleParams
 from autonomy.sensing.channel import ChannelConfig, minimum_spanning_tree_routes
 from interfaces.state import OwnState, TargetEstimate, TeammateState
+from simulator.kinematic.infoplan import InfoLoopConfig, fuse_at_base, run_info_loop
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 
 
 def test_radar_information_closed_form():

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from autonomy.guidance.keepout import footprint_distance
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.nmpc import NmpcStandoffGuidance
 from autonomy.guidance.nmpc_config import NmpcConfig
 from autonomy.guidance.vector_field import wrap_angle
 from interfaces.setpoints import UnicycleSetpoint
 from interfaces.state import OwnState, TargetEstimate, TeammateState
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 from worlds.geometry import Building
 
 RD = 120.0
@@ -130,7 +130,8 @@ class _Broken:
 def test_failed_fast_solve_is_retried_with_the_robust_solver(retry):
     g = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, robust_retry=retry), 0)
     g.command(*_states(0.0), 0.0)  # cold start (IPOPT) gives a plan to warm-start from
-    g._solver = g._curv_solver = _Broken()  # both SQP tiers
+    for tier in g.fast.tiers:  # both SQP tiers
+        tier.solver = _Broken()
     sp = g.command(*_states(0.5), 0.5)
     assert g.stats.retries == (1 if retry else 0)
     assert g.stats.failures == (0 if retry else 1) and g.stats.fallbacks_shifted == (0 if retry else 1)
@@ -211,14 +212,15 @@ def test_tiered_escalates_a_capped_gauss_newton_solve_to_the_curvature_tier():
     g.command(*_states(0.0), 0.0)  # cold start (IPOPT)
     g.command(*_states(0.5), 0.5)  # warm: Gauss-Newton tier, one iteration, from a good guess
     esc = g.stats.escalations
-    g._solver = _Capped(g._solver)
+    gauss_newton = g.fast.tiers[0]
+    gauss_newton.solver = _Capped(gauss_newton.solver)
     sp = g.command(*_states(1.0), 1.0)
-    assert g._solver.calls == 1 and g.stats.escalations == esc + 1
+    assert gauss_newton.solver.calls == 1 and g.stats.escalations == esc + 1
     assert g.stats.retries == 0 and g.stats.failures == 0 and g._plan_t == 1.0
     np.testing.assert_allclose([sp.speed, sp.heading_rate], g._plan_u[0])
     assert g.stats.summary()["escalations"] == g.stats.escalations
     g2 = NmpcStandoffGuidance(NmpcConfig(standoff_radius=RD, hessian="gauss_newton"), 0)
-    assert g2._curv_solver is None  # a single tier: nothing to escalate to
+    assert len(g2.fast.tiers) == 1  # a single tier: nothing to escalate to
 
 
 def _looping_warm_start(probe: bool):

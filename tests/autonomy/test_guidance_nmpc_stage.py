@@ -51,10 +51,11 @@ def test_fatrop_reaches_the_ipopt_optimum_with_active_soft_constraints():
     w0 = g._initial_guess(x0, 0.0, tgt, mates)
     w0[-cfg.horizon:] = g._feasible_slacks(w0, par)
     args = {"x0": w0, "p": par, "lbx": g._lbx, "ubx": g._ubx, "lbg": g._lbg, "ubg": g._ubg}
-    fat = g._solver(**args)
-    assert g._solver.stats()["success"]
-    ref = g._cold_solver(**args)
-    assert g._cold_solver.stats()["success"]
+    [fatrop], [ipopt] = g.fast.tiers, g.cold.tiers
+    fat = fatrop.solver(**args)
+    assert fatrop.solver.stats()["success"]
+    ref = ipopt.solver(**args)
+    assert ipopt.solver.stats()["success"]
     assert float(fat["f"][0]) == pytest.approx(float(ref["f"][0]), rel=1e-5)
     np.testing.assert_allclose(fat["x"], ref["x"], atol=2e-2)
     gv = fat["g"]

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from autonomy.guidance.kinematic_loop import LoopConfig, run_kinematic_loop
 from autonomy.guidance.unicycle import UnicycleParams
 from autonomy.guidance.vector_field import VectorFieldConfig, VectorFieldGuidance, wrap_angle
+from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 
 RD = 120.0
 

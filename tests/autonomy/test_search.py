@@ -1,4 +1,5 @@
-"""Set-membership search control: unicycle rollout, cost terms, sequential decisions, guidance, missions."""
+"""Set-membership search control: unicycle rollout, cost terms, sequential decisions, guidance (the kinematic
+missions are tested in tests/simulator/kinematic/test_search_mission.py)."""
 
 import numpy as np
 import pytest
@@ -7,7 +8,6 @@ import shapely
 from autonomy.estimation.setmem import polygons as pg
 from autonomy.estimation.setmem.estimator import SetEstimate, SetMembershipConfig, SetMembershipEstimator
 from autonomy.guidance.search.guidance import SetMembershipSearchGuidance, teammate_path
-from autonomy.guidance.search.mission import MissionConfig, SearchMission, line_of_sight_graph
 from autonomy.guidance.search.planner import SearchConfig, SearchPlanner, decision_order, rollout
 from autonomy.guidance.search.regions import PrismViewRegion
 from autonomy.sensing.box_sensor import BoxSensor, BoxSensorConfig
@@ -119,12 +119,6 @@ def test_prism_region_matches_the_sensor():
         assert shapely.symmetric_difference(exact, approx).area <= 0.01 * 82.84**2
 
 
-def test_line_of_sight_graph():
-    obst = shapely.box(40, -10, 60, 10)
-    A = line_of_sight_graph(np.array([[0.0, 0.0], [100.0, 0.0], [50.0, 50.0]]), obst)
-    assert not A[0, 1] and A[0, 2] and A[1, 2] and not A[0, 0]
-
-
 def test_guidance_command_and_shared_plan():
     est = SetMembershipEstimator(SetMembershipConfig(), AREA)
     pl = planner()
@@ -183,37 +177,3 @@ def _decision_with(u, p, heading):
     path = rollout(np.asarray(p, float), heading, u, CFG)
     return SearchDecision(u=u, path=path, cost=0.0, terms={}, costs=np.zeros(1), controls=np.array([u]),
                           admissible=np.ones(1, bool))
-
-
-SMALL = dict(area_size=(250.0, 250.0), n_uavs=3, n_targets=2, n_decoys=2, n_obstacles=2,
-             obstacle_sides=(20.0, 40.0), steps=80)
-
-
-@pytest.fixture(scope="module")
-def mpc_mission():
-    return SearchMission(MissionConfig(control="mpc", **SMALL), np.random.default_rng(0)).run()
-
-
-def test_mission_mpc_shrinks_xbar_keeps_guarantee(mpc_mission):
-    r = mpc_mission
-    assert r.guarantee.all()
-    assert r.collisions(CFG.d_col) == 0
-    xbar = r.area_Xbar.mean(axis=1)
-    assert xbar[0] > 0.7
-    assert xbar[40:].mean() < 0.15  # the team holds the unexplored set below 15 % of the area
-    assert xbar.min() < 0.1
-
-
-def test_mission_mpc_beats_random_turns(mpc_mission):
-    rnd = SearchMission(MissionConfig(control="random", **SMALL), np.random.default_rng(0)).run()
-    assert rnd.guarantee.all()
-    assert mpc_mission.area_Xbar[40:].mean() < 0.6 * rnd.area_Xbar[40:].mean()
-
-
-def test_mission_decoys_taken_then_erased(mpc_mission):
-    """Each decoy that entered X (taken for a target) is later erased by a view from outside its cone."""
-    d = mpc_mission.decoy_in_X
-    assert d.any()
-    for j in np.flatnonzero(d.any(axis=0)):
-        first = int(np.argmax(d[:, j]))
-        assert not d[first:, j].all(), f"decoy {j} never erased after step {first + 1}"

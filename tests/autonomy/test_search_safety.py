@@ -8,11 +8,11 @@ from hypothesis import strategies as st
 
 from autonomy.estimation.setmem import polygons as pg
 from autonomy.estimation.setmem.estimator import SetEstimate
-from autonomy.guidance.search.mission import MissionConfig, SearchMission
 from autonomy.guidance.search.planner import SearchConfig, SearchPlanner
 from autonomy.guidance.search.regions import PrismViewRegion
 from autonomy.guidance.search.safety import TOL, LoiterSafety
 from autonomy.sensing.box_sensor import BoxSensorConfig
+from simulator.kinematic.search_mission import MissionConfig, SearchMission
 from worlds.geometry import Building
 
 AREA = shapely.box(0.0, 0.0, 500.0, 500.0)

@@ -13,9 +13,9 @@ from autonomy.estimation.setmem.estimator import (
     SetMembershipEstimator,
     free_search_area,
 )
-from autonomy.guidance.search.mission import MissionConfig, SearchMission
 from autonomy.guidance.search.planner import SearchConfig
 from autonomy.sensing.measurement import Detection
+from simulator.kinematic.search_mission import MissionConfig, SearchMission
 from worlds.geometry import Building
 
 AREA = shapely.box(0.0, 0.0, 400.0, 400.0)

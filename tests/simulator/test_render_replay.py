@@ -12,7 +12,8 @@ import pytest
 from simulator.api import run
 from simulator.render.config import RenderConfig
 from simulator.render.encode import VideoEncoder
-from simulator.render.replay import Replayer, render_run
+from simulator.render.replay import Replayer
+from simulator.render.video import render_run
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ import pytest
 from simulator.render.world_marks import RadioLinks, RegardOutline, probability_rgb, radar_regards
 from worlds.geometry import Building
 from worlds.loader import load_world
+from worlds.schema import World
 
 
 def _world(tmp_path, comms: str):
@@ -59,8 +60,9 @@ def test_sector_regard_turns_with_the_heading_and_ends_at_max_range():
 
 
 def test_regards_come_from_radars_with_a_maximum_range():
-    world = {"uavs": [{"sensors": [{"type": "radar", "max_range": 800,
-                                    "fov": {"frame": "world", "azimuth_limits_deg": [0, 90]}},
-                                   {"type": "radar"}, {"type": "camera", "max_range": 5}]}]}
+    radar = {"type": "radar", "rate_hz": 10, "sigma_range": 1.0, "sigma_azimuth_deg": 1.0}
+    world = World.model_validate({"uavs": [{"id": "a", "initial": {"position": [0, 0, 60]}, "sensors": [
+        {**radar, "max_range": 800, "fov": {"frame": "world", "azimuth_limits_deg": [0, 90]}},
+        radar, {"type": "camera", "rate_hz": 10, "far": 5}]}]})
     [r] = radar_regards(world)
     assert r.frame == "world" and r.max_range == 800.0 and r.azimuth_limits == pytest.approx((0.0, np.pi / 2))

@@ -42,7 +42,7 @@ sequence hits one (the reproduction measured approaches to 0 m with ``J_s`` alon
 that state keeps ``d_col + clearance_margin`` from every obstacle footprint. The cost is still evaluated on the
 held-control rollout; admissibility only filters which grid values may win. If the current state is safe, its
 own loiter turn ``+-u_max`` (always on the grid) is admissible, so by induction every flown chord keeps the
-clearance for all time from a safe start (:class:`~autonomy.guidance.search.mission.SearchMission` draws its
+clearance for all time from a safe start (the simulator's kinematic search mission draws its
 starts until safe). From an unsafe start with no admissible candidate the planner takes the candidate of largest
 clearance and flags the decision (``SearchDecision.safe`` is False).
 

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from autonomy.guidance.formation.closed_loop import (CASES, FormationLoopConfig, Segment, manoeuvre_truth,
-                                                     run_formation_loop)
+from simulator.kinematic.formation import CASES, FormationLoopConfig, Segment, manoeuvre_truth, run_formation_loop
 
 
 def test_turn_keeps_speed_and_turns_by_omega_t():

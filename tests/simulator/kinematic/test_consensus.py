@@ -4,7 +4,7 @@ bounds."""
 import numpy as np
 import pytest
 
-from autonomy.guidance.consensus_loop import STOP_AND_GO, ConsensusLoopConfig, run_consensus_loop, target_drive
+from simulator.kinematic.consensus import STOP_AND_GO, ConsensusLoopConfig, run_consensus_loop, target_drive
 
 
 def test_target_drive_follows_its_script():

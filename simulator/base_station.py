@@ -25,7 +25,7 @@ another UAV's next hop is that UAV.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -37,7 +37,7 @@ from autonomy.guidance.types import TargetEstimate
 from autonomy.sensing.channel import Channel, RoutingTree
 from autonomy.sensing.messages import InformationMessage
 
-__all__ = ["BASE_NODE", "BaseStation", "build_base_station", "route_parents"]
+__all__ = ["BASE_NODE", "BaseStation", "BaseStationLink", "build_base_station", "route_parents"]
 
 BASE_NODE = "base"
 """Radio node name of the base station (also in ``comms.outages`` and ``comms.links``)."""
@@ -186,3 +186,24 @@ def build_base_station(world: Any, agents: Sequence[Any], channel: Channel | Non
     return BaseStation(position_W=np.asarray(world.comms.base_station, dtype=float), uav_ids=[u.id for u in world.uavs],
                        reporters=reporters, fusion=BaseStationFusion(model), channel=channel, recorder=recorder,
                        chain=world.comms.routing == "chain")
+
+
+class BaseStationLink:
+    """The base station as its team protocol sees it (:class:`autonomy.team.base_station.BaseLink`): the UAVs'
+    positions come from ``positions`` at each step.
+
+    Parameters
+    ----------
+    station : BaseStation
+        The base.
+    positions : callable
+        ``positions() -> {uav id: (3,) position (m)}`` of every UAV now.
+    """
+
+    def __init__(self, station: BaseStation, positions: Callable[[], Mapping[str, np.ndarray]]) -> None:
+        self.station = station
+        self.positions = positions
+
+    def step(self, tick: int, t: float, due: Sequence[int]) -> None:
+        """Route, send, fuse and record at ``tick`` for the members ``due`` (UAV indices)."""
+        self.station.step(tick, t, self.positions(), due)

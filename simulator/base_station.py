@@ -26,7 +26,7 @@ another UAV's next hop is that UAV.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -36,6 +36,11 @@ from autonomy.fusion.base_station import BaseStationFusion, InformationReporter
 from autonomy.guidance.types import TargetEstimate
 from autonomy.sensing.channel import Channel, RoutingTree
 from autonomy.sensing.messages import InformationMessage
+from simulator.record import RunRecorder
+from worlds.schema import World
+
+if TYPE_CHECKING:
+    from simulator.slots import AgentSlot
 
 __all__ = ["BASE_NODE", "BaseStation", "BaseStationLink", "build_base_station", "route_parents"]
 
@@ -68,14 +73,14 @@ class BaseStation:
         The base's information filter.
     channel : Channel
         The run's radio.
-    recorder : object
-        The run recorder (``append`` rows to streams).
+    recorder : RunRecorder
+        The run recorder.
     chain : bool
         Fixed relay chain instead of the minimum spanning tree.
     """
 
     def __init__(self, *, position_W: np.ndarray, uav_ids: Sequence[str], reporters: Mapping[int, InformationReporter],
-                 fusion: BaseStationFusion, channel: Channel, recorder: Any, chain: bool = False) -> None:
+                 fusion: BaseStationFusion, channel: Channel, recorder: RunRecorder, chain: bool = False) -> None:
         self.position_W = np.asarray(position_W, dtype=float).reshape(3)
         self.uav_ids = list(uav_ids)
         self.reporters = dict(reporters)
@@ -172,7 +177,7 @@ class BaseStation:
                 "delivery_ratio": delivered / sent if sent else None, "uavs": uavs}
 
 
-def build_base_station(world: Any, agents: Sequence[Any], channel: Channel | None, recorder: Any
+def build_base_station(world: World, agents: Sequence[AgentSlot], channel: Channel | None, recorder: RunRecorder
                        ) -> BaseStation | None:
     """The base station of ``world`` when UAVs fuse at it (their agents' estimators are
     :class:`InformationReporter`), else None. Its filter predicts with the first fusing UAV's motion model

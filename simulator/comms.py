@@ -11,7 +11,6 @@ Two regimes, as the world's ``comms`` section says:
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 
@@ -24,6 +23,7 @@ from autonomy.sensing.measurement import Detection
 from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SceneQuery
 from simulator.truth import UavFleet, yaw_of
+from worlds.schema import CommsSection
 
 __all__ = ["Comms", "Outage"]
 
@@ -42,7 +42,7 @@ class Comms:
         The UAVs (where the radio sends from and to; their true states under perfect comms).
     channel : Channel | None
         The radio; None for perfect comms.
-    comms : object
+    comms : CommsSection
         The world's ``comms`` section (``links``, ``block_by_buildings``).
     outages : list of Outage
         Scheduled link outages in ticks.
@@ -54,7 +54,7 @@ class Comms:
         Whether the UAVs share their local estimates.
     """
 
-    def __init__(self, *, uav_ids: Sequence[str], quads: UavFleet | None, channel: Channel | None, comms: Any,
+    def __init__(self, *, uav_ids: Sequence[str], quads: UavFleet | None, channel: Channel | None, comms: CommsSection,
                  outages: list[Outage], scene_query: SceneQuery, receivers: Mapping[int, Agent],
                  share_estimates: bool) -> None:
         self.uav_ids = list(uav_ids)

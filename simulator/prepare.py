@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet as p
@@ -34,11 +34,14 @@ from simulator.seeding import RunSeeds
 from simulator.slots import AgentSlot, SensorSlot
 from simulator.tick import Assembly
 from simulator.truth import Truth
-from worlds.build import build_geometry
+from worlds.build import WorldGeometry, build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
 
-__all__ = ["Prepared", "build_assembly", "build_teams", "prepare"]
+if TYPE_CHECKING:
+    from simulator.engine import RunOptions
+
+__all__ = ["Prepared", "build_assembly", "build_teams", "prepare", "team_comms"]
 
 
 @dataclass
@@ -47,13 +50,13 @@ class Prepared:
 
     loaded: LoadedWorld
     clock: Clock
-    geometry: Any
+    geometry: WorldGeometry
     sensors: list[SensorSlot]
     agents: list[AgentSlot]
     hcmci: HcmciConfig | None = None
 
 
-def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: Any) -> Prepared:
+def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOptions) -> Prepared:
     """Build geometry, sensors, estimators and guidance; raises :class:`WorldError` naming the entry on a bad one."""
     from vehicles.quadrotor.airframes import load_airframe
 
@@ -131,6 +134,14 @@ def build_teams(methods: list[str], agents: list[AgentSlot], hcmci: HcmciConfig 
     return teams
 
 
+def team_comms(teams: list[TeamProtocol], agents: list[AgentSlot], **parts: Any) -> Comms:
+    """The run's :class:`~simulator.comms.Comms` (``parts``: its other arguments) for ``teams``: the members of the
+    protocols that take detections receive them, and estimates are shared when a protocol shares them."""
+    takers = {u for team in teams if team.takes_detections for u in team.members}
+    return Comms(receivers={a.uav: a.agent for a in agents if a.uav in takers},
+                 share_estimates=any(team.shares_estimates and team.members for team in teams), **parts)
+
+
 def _check_information_tracker(loaded: LoadedWorld, i: int, estimator: TargetEstimator, method: str) -> None:
     """HCMCI and base-station fusion need the built-in tracker with the information filter (also when an estimator was
     passed in code)."""
@@ -188,11 +199,8 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     channel = build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query)
     truth = Truth(quads, cars, car_kinds, decoys)
     teams = build_teams([u.autonomy.fusion.method for u in world.uavs], prep.agents, prep.hcmci)
-    comms = Comms(uav_ids=uav_ids, quads=quads, channel=channel, comms=world.comms, outages=outages,
-                  scene_query=query,
-                  receivers={a.uav: a.agent for a in prep.agents
-                             if any(a.uav in tm.members for tm in teams if tm.takes_detections)},
-                  share_estimates=any(tm.shares_estimates and tm.members for tm in teams))
+    comms = team_comms(teams, prep.agents, uav_ids=uav_ids, quads=quads, channel=channel, comms=world.comms,
+                       outages=outages, scene_query=query)
     for team in teams:  # the engine-side parts of the protocols: the base station, the search record
         if isinstance(team, BaseStationTeam):
             station = build_base_station(world, prep.agents, channel, recorder)

@@ -4,7 +4,7 @@ collision checks and events."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import pybullet as p
@@ -16,6 +16,7 @@ from autonomy.guidance.types import TargetEstimate
 from autonomy.sensing.measurement import SensorOutput
 from simulator.comms import Outage
 from simulator.record import RunRecorder
+from simulator.scene import Scene
 from simulator.streams import STREAMS
 from simulator.truth import GroundFleet, UavFleet
 
@@ -39,7 +40,7 @@ class ContactSource(Protocol):
 class PybulletContacts:
     """:class:`ContactSource` of a PyBullet scene."""
 
-    def __init__(self, scene: Any, quads: UavFleet, cars: GroundFleet | None, uav_ids: Sequence[str],
+    def __init__(self, scene: Scene, quads: UavFleet, cars: GroundFleet | None, uav_ids: Sequence[str],
                  car_ids: Sequence[str]) -> None:
         self.client = scene.client
         self.quads = quads

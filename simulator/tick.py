@@ -17,21 +17,25 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from autonomy.guidance.setpoints import Setpoint, UnicycleSetpoint, VelocitySetpoint
 from autonomy.guidance.types import OwnState, TargetEstimate
+from autonomy.sensing.channel import Channel
 from autonomy.sensing.measurement import SensorOutput
 from autonomy.sensing.scene import SceneQuery, SensorPose
 from autonomy.team.base import TeamProtocol
 from simulator.clock import Clock
-from simulator.comms import Comms
+from simulator.comms import Comms, Outage
 from simulator.recording import Recording
 from simulator.slots import AgentSlot, SensorSlot
-from simulator.truth import GroundFleet, Truth, UavFleet
+from simulator.truth import Fleet, GroundFleet, Truth, UavFleet
 from vehicles.quadrotor.commands import FlightCommand, UnicycleCommand, VelocityCommand
+from worlds.geometry import Building
+from worlds.roads.network import RoadNetwork
+from worlds.schema import World
 
 __all__ = ["Assembly", "Physics", "TickContext", "WALL_PHASES"]
 
@@ -82,10 +86,10 @@ class Assembly:
     sensors: list[SensorSlot] = field(default_factory=list)
     agents: list[AgentSlot] = field(default_factory=list)
     record_div: int = 12
-    buildings: list = field(default_factory=list)
-    network: Any = None
-    world_spec: Any = None
-    outages: list = field(default_factory=list)
+    buildings: list[Building] = field(default_factory=list)
+    network: RoadNetwork | None = None
+    world_spec: World | None = None
+    outages: list[Outage] = field(default_factory=list)
     latest_estimates: dict[int, TargetEstimate | None] = field(default_factory=dict)
     latest_local: dict[int, TargetEstimate | None] = field(default_factory=dict)
     latest_setpoints: dict[int, Setpoint] = field(default_factory=dict)
@@ -105,7 +109,7 @@ class Assembly:
         return self.truth.cars
 
     @property
-    def channel(self) -> Any:
+    def channel(self) -> Channel | None:
         return self.comms.channel
 
     def team_of(self, uav: int) -> TeamProtocol | None:
@@ -181,7 +185,7 @@ class Assembly:
         for team in self.teams:
             team.end_step([a for a in due if a.uav in team.members], ctx)
 
-    def _record(self, tick: int, t: float, fleets: list) -> None:
+    def _record(self, tick: int, t: float, fleets: list[Fleet]) -> None:
         if self.outages:
             self.recording.outage_events(tick, t, self.outages)
         for f in fleets:

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet as p
+from pydantic import BaseModel
 
 from autonomy.agent import Agent, TargetEstimator
 from autonomy.estimation.setmem.tracker import SetMembershipTracker
@@ -157,7 +158,7 @@ def _checked(loaded: LoadedWorld, where: str, spec: Any, build: Callable[[], Any
     except WorldError:
         raise
     except (ValueError, TypeError, KeyError, ImportError) as exc:
-        value = spec.model_dump(exclude_defaults=True) if hasattr(spec, "model_dump") else spec
+        value = spec.model_dump(exclude_defaults=True) if isinstance(spec, BaseModel) else spec
         raise WorldError(str(loaded.path), [WorldIssue(where, value, f"a valid configuration ({exc})")]) from None
 
 

@@ -63,6 +63,7 @@ def test_phases_run_in_the_order_of_the_design_and_each_component_at_its_rate(tm
     assert rec.streams["estimates"]["tick"].tolist() == [3, 3, 6, 6, 9, 9, 12, 12]
     assert len(rec.streams["detections"]["tick"]) == 12
     assert "fused_estimates" not in rec.streams and "measurement_sharing" not in rec.streams
+    assert set(rec.streams) == {"uav_truth", "estimates", "commands", "detections"} <= set(STREAMS)
 
 
 def test_an_agent_takes_the_detections_that_have_arrived_by_its_step(tmp_path):

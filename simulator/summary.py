@@ -60,7 +60,7 @@ class _Errors:
 
 
 class MetricsTracker:
-    """Accumulates per-UAV and per-target metrics from an :class:`~simulator.assembly.Assembly` tick by tick."""
+    """Accumulates per-UAV and per-target metrics from an :class:`~simulator.tick.Assembly` tick by tick."""
 
     def __init__(self, seed: int, physics_hz: int) -> None:
         self.seed = seed

@@ -25,19 +25,24 @@ another UAV's next hop is that UAV.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.tracker import make_motion_model
 from autonomy.fusion.base_station import BaseStationFusion, InformationReporter
+from interfaces.state import TargetEstimate
 from autonomy.sensing.channel import Channel, RoutingTree
 from autonomy.sensing.messages import InformationMessage
-from interfaces.state import TargetEstimate
+from simulator.record import RunRecorder
+from worlds.schema import World
 
-__all__ = ["BASE_NODE", "BaseStation", "build_base_station", "route_parents"]
+if TYPE_CHECKING:
+    from simulator.slots import AgentSlot
+
+__all__ = ["BASE_NODE", "BaseStation", "BaseStationLink", "build_base_station", "route_parents"]
 
 BASE_NODE = "base"
 """Radio node name of the base station (also in ``comms.outages`` and ``comms.links``)."""
@@ -68,14 +73,14 @@ class BaseStation:
         The base's information filter.
     channel : Channel
         The run's radio.
-    recorder : object
-        The run recorder (``append`` rows to streams).
+    recorder : RunRecorder
+        The run recorder.
     chain : bool
         Fixed relay chain instead of the minimum spanning tree.
     """
 
     def __init__(self, *, position_W: np.ndarray, uav_ids: Sequence[str], reporters: Mapping[int, InformationReporter],
-                 fusion: BaseStationFusion, channel: Channel, recorder: Any, chain: bool = False) -> None:
+                 fusion: BaseStationFusion, channel: Channel, recorder: RunRecorder, chain: bool = False) -> None:
         self.position_W = np.asarray(position_W, dtype=float).reshape(3)
         self.uav_ids = list(uav_ids)
         self.reporters = dict(reporters)
@@ -172,7 +177,7 @@ class BaseStation:
                 "delivery_ratio": delivered / sent if sent else None, "uavs": uavs}
 
 
-def build_base_station(world: Any, agents: Sequence[Any], channel: Channel | None, recorder: Any
+def build_base_station(world: World, agents: Sequence[AgentSlot], channel: Channel | None, recorder: RunRecorder
                        ) -> BaseStation | None:
     """The base station of ``world`` when UAVs fuse at it (their agents' estimators are
     :class:`InformationReporter`), else None. Its filter predicts with the first fusing UAV's motion model
@@ -186,3 +191,24 @@ def build_base_station(world: Any, agents: Sequence[Any], channel: Channel | Non
     return BaseStation(position_W=np.asarray(world.comms.base_station, dtype=float), uav_ids=[u.id for u in world.uavs],
                        reporters=reporters, fusion=BaseStationFusion(model), channel=channel, recorder=recorder,
                        chain=world.comms.routing == "chain")
+
+
+class BaseStationLink:
+    """The base station as its team protocol sees it (:class:`autonomy.team.base_station.BaseLink`): the UAVs'
+    positions come from ``positions`` at each step.
+
+    Parameters
+    ----------
+    station : BaseStation
+        The base.
+    positions : callable
+        ``positions() -> {uav id: (3,) position (m)}`` of every UAV now.
+    """
+
+    def __init__(self, station: BaseStation, positions: Callable[[], Mapping[str, np.ndarray]]) -> None:
+        self.station = station
+        self.positions = positions
+
+    def step(self, tick: int, t: float, due: Sequence[int]) -> None:
+        """Route, send, fuse and record at ``tick`` for the members ``due`` (UAV indices)."""
+        self.station.step(tick, t, self.positions(), due)

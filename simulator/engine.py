@@ -23,12 +23,14 @@ from typing import Any
 
 import yaml
 
-from simulator.assembly import Assembly, build_assembly, prepare
+from simulator.prepare import build_assembly, prepare
 from simulator.clock import Clock
 from simulator.plots import write_geometry, write_plots
 from simulator.record import RunRecorder
 from simulator.seeding import RunSeeds
+from simulator.streams import STREAMS
 from simulator.summary import MetricsTracker
+from simulator.tick import Assembly
 from worlds.loader import LoadedWorld
 
 __all__ = ["RunOptions", "RunOutcome", "run_world"]
@@ -101,7 +103,7 @@ def _versions() -> dict[str, str]:
 
 def _breakdown(wall: float, setup_s: float, phases: dict[str, float]) -> dict[str, float]:
     """Where a run's wall time went: ``setup`` (world, solvers, scene), each phase of the tick
-    (:data:`simulator.assembly.WALL_PHASES`) and ``other`` (metrics, flushes, the run directory, the rest)."""
+    (:data:`simulator.tick.WALL_PHASES`) and ``other`` (metrics, flushes, the run directory, the rest)."""
     out = {"setup": setup_s, **phases}
     out["other"] = max(wall - sum(out.values()), 0.0)
     return {k: round(v, 4) for k, v in out.items()}
@@ -118,7 +120,7 @@ def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
     seeds = RunSeeds(seed)
     wall0 = time.perf_counter()
     prepared = prepare(loaded, clock, seeds, options)  # bad input fails here, before PyBullet and the run directory
-    recorder = RunRecorder(out)
+    recorder = RunRecorder(out, schemas=STREAMS)
     resolved = world.model_dump(mode="json")
     resolved["sim"]["seed"] = seed
     resolved["sim"]["duration_s"] = duration

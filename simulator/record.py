@@ -23,9 +23,12 @@ import json
 import os
 import time
 from pathlib import Path
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+
+from simulator.streams import StreamSchema
 
 __all__ = ["RunRecorder", "atomic_write_text", "json_default"]
 
@@ -58,8 +61,9 @@ def atomic_write_text(path: Path, text: str, sync: bool = True) -> None:
 
 
 class _Stream:
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, schema: StreamSchema | None = None) -> None:
         self.folder = folder
+        self.schema = schema
         self.columns: dict[str, list] = {}
         self.rows = 0
         self.parts = 0
@@ -70,6 +74,8 @@ class _Stream:
             differ = set(self.columns) ^ set(columns)
             raise KeyError(f"stream {self.folder.name}: columns differ from the first rows: {sorted(differ)}")
         if not self.columns:
+            if self.schema is not None:
+                self.schema.check(tuple(columns))
             self.columns = {k: [] for k in columns}
         for k, v in columns.items():
             self.columns[k].extend(v)
@@ -102,10 +108,13 @@ class RunRecorder:
     ----------
     out_dir : Path
         The run directory; created if missing. Existing record files in it are replaced.
+    schemas : mapping of str to StreamSchema, optional
+        Declared streams (:data:`simulator.streams.STREAMS`): the first row of each is checked against its schema.
     """
 
-    def __init__(self, out_dir: Path) -> None:
+    def __init__(self, out_dir: Path, schemas: Mapping[str, StreamSchema] | None = None) -> None:
         self.out_dir = Path(out_dir)
+        self.schemas = dict(schemas or {})
         self.out_dir.mkdir(parents=True, exist_ok=True)
         for old in ("events.jsonl", "metrics.json"):
             (self.out_dir / old).unlink(missing_ok=True)
@@ -166,7 +175,7 @@ class RunRecorder:
 
     def _stream(self, name: str) -> _Stream:
         if name not in self._streams:
-            self._streams[name] = _Stream(self.out_dir / "timeseries" / name)
+            self._streams[name] = _Stream(self.out_dir / "timeseries" / name, self.schemas.get(name))
         return self._streams[name]
 
     def flush(self, metrics: dict[str, Any] | None = None, sync: bool = True) -> None:

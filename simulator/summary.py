@@ -31,6 +31,16 @@ from typing import Any
 
 import numpy as np
 
+from autonomy.diagnostics import KeepsSolverStats, SolverSummary
+from interfaces.state import TargetEstimate
+from autonomy.team.base_station import BaseStationTeam
+from autonomy.team.hcmci import HcmciConsensusTeam
+from autonomy.team.set_fusion import SetFusionTeam
+from simulator.base_station import BaseStation, BaseStationLink
+from simulator.search_team import SearchTeamRun
+from simulator.slots import AgentSlot
+from simulator.tick import Assembly
+
 __all__ = ["MetricsTracker"]
 
 
@@ -50,12 +60,12 @@ class _Errors:
 
 
 class MetricsTracker:
-    """Accumulates per-UAV and per-target metrics from an :class:`~simulator.assembly.Assembly` tick by tick."""
+    """Accumulates per-UAV and per-target metrics from an :class:`~simulator.tick.Assembly` tick by tick."""
 
     def __init__(self, seed: int, physics_hz: int) -> None:
         self.seed = seed
         self.physics_hz = physics_hz
-        self.asm: Any = None
+        self.asm: Assembly | None = None
         self.errors: dict[int, _Errors] = defaultdict(_Errors)
         self.fused_errors: dict[int, _Errors] = defaultdict(_Errors)
         self.base_errors = _Errors()
@@ -65,7 +75,7 @@ class MetricsTracker:
         self.standoffs: dict[int, float] = {}
         self._every = 1  # ticks between observations that can have something to do: gcd of the agent and record rates
 
-    def attach(self, asm: Any) -> None:
+    def attach(self, asm: Assembly) -> None:
         self.asm = asm
         self._every = math.gcd(asm.record_div, *(a.divisor for a in asm.agents))
         n = len(asm.uav_ids)
@@ -76,7 +86,7 @@ class MetricsTracker:
             if g.type in ("vector_field", "nmpc"):
                 self.standoffs[i] = g.standoff_m
 
-    def observe(self, tick: int, asm: Any) -> None:
+    def observe(self, tick: int, asm: Assembly) -> None:
         if tick % self._every:  # no agent due and no record tick (most ticks)
             return
         due = [a.uav for a in asm.agents if tick % a.divisor == 0]
@@ -86,12 +96,13 @@ class MetricsTracker:
             p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
             slots = _slots_by_uav(asm)
             for i in due:
-                if slots[i].search:  # a set-membership searcher holds sets, not a point estimate
+                team = asm.team_of(i)
+                if team is not None and not team.point_estimates:  # e.g. a searcher holds sets, not a point
                     continue
                 self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
                 if slots[i].agent.fusion is not None:
                     self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
-            base = getattr(asm, "base_station", None)
+            base = _base_station(asm)
             if base is not None and base.last_tick == tick:
                 self._error(self.base_errors, base.estimate, p_true, v_true)
             if self.standoffs and asm.quads is not None:
@@ -111,7 +122,7 @@ class MetricsTracker:
             self.min_sep = np.minimum(self.min_sep, d.min(axis=1))
 
     @staticmethod
-    def _error(err: _Errors, est: Any, p_true: np.ndarray, v_true: np.ndarray) -> None:
+    def _error(err: _Errors, est: TargetEstimate | None, p_true: np.ndarray, v_true: np.ndarray) -> None:
         err.steps += 1
         if est is not None:
             err.pos.append(float(np.linalg.norm(est.p_W[:2] - p_true)))
@@ -128,20 +139,22 @@ class MetricsTracker:
         }
         if asm is None:
             return out
-        out["events"] = dict(asm.recorder.event_counts)
+        out["events"] = dict(asm.recording.recorder.event_counts)
         out["target_index"] = asm.target_index
         uavs: dict[str, Any] = {}
         slots = _slots_by_uav(asm)
         for i, uid in enumerate(asm.uav_ids):
             slot = slots.get(i)
+            counts = asm.recording.event_counts_by_uav
             m: dict[str, Any] = {
-                "collisions": asm.event_counts_by_uav.get(("collision", i), 0),
-                "command_saturations": asm.event_counts_by_uav.get(("command_saturated", i), 0),
+                "collisions": counts.get(("collision", i), 0),
+                "command_saturations": counts.get(("command_saturated", i), 0),
             }
             if self.min_sep is not None and np.isfinite(self.min_sep[i]):
                 m["min_separation_m"] = float(self.min_sep[i])
-            stats = getattr(slot.agent.guidance, "stats", None) if slot is not None else None
-            if stats is not None and hasattr(stats, "summary"):
+            law = slot.agent.guidance if slot is not None else None
+            stats = law.stats if isinstance(law, KeepsSolverStats) else None
+            if isinstance(stats, SolverSummary):
                 s = stats.summary()
                 m.update(solver_calls=s.get("solves", 0), solver_failures=s.get("failures", 0),
                          solver_fallbacks=s.get("fallbacks_shifted", 0) + s.get("fallbacks_vector_field", 0),
@@ -153,20 +166,21 @@ class MetricsTracker:
                     m["solver_restart_probes"], m["solver_restarts"] = s["restart_probes"], s["restarts"]
             if self.standoff_err.get(i):
                 m["standoff_error_mean_m"] = float(np.mean(self.standoff_err[i]))
-            if getattr(slot, "hcmci", False):
-                m["consensus_linked_steps"] = asm.consensus_linked_steps.get(i, 0)
+            team = asm.team_of(i)
+            if isinstance(team, HcmciConsensusTeam):
+                m["consensus_linked_steps"] = team.linked_steps.get(i, 0)
             uavs[uid] = m
         if self.phase_err:
             out["phase_error_mean_deg"] = float(np.mean(self.phase_err))
         out["uavs"] = uavs
-        if getattr(asm, "hcmci", None) is not None:
-            out["consensus"] = {"team_steps": asm.hcmci.steps,
-                                "active_links_mean": float(np.mean(asm.consensus_links)) if asm.consensus_links
-                                else None}
-        if getattr(asm, "search", None) is not None:
-            out["search"] = asm.search.summary()
-        if getattr(asm, "base_station", None) is not None:
-            out["base_station"] = {**asm.base_station.summary(), **self.base_errors.summary()}
+        for team in asm.teams:
+            if isinstance(team, HcmciConsensusTeam):
+                out["consensus"] = team.summary()
+            elif isinstance(team, SetFusionTeam) and isinstance(team.observer, SearchTeamRun):
+                out["search"] = team.observer.summary()
+        base = _base_station(asm)
+        if base is not None:
+            out["base_station"] = {**base.summary(), **self.base_errors.summary()}
         if asm.channel is not None:
             cs = asm.channel.stats
             out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,
@@ -179,9 +193,17 @@ class MetricsTracker:
         return _finite_or_none(out)
 
 
-def _slots_by_uav(asm: Any) -> dict[int, Any]:
+def _slots_by_uav(asm: Assembly) -> dict[int, AgentSlot]:
     """The assembly's agent slots by the index of the UAV they fly (``slot.uav``), not by list position."""
     return {a.uav: a for a in asm.agents}
+
+
+def _base_station(asm: Assembly) -> BaseStation | None:
+    """The run's base station, if UAVs report to one."""
+    for team in asm.teams:
+        if isinstance(team, BaseStationTeam) and isinstance(team.base, BaseStationLink):
+            return team.base.station
+    return None
 
 
 def _finite_or_none(obj: Any) -> Any:

@@ -108,3 +108,7 @@ class Guidance(abc.ABC):
         Shared with teammates as ``TeammateState.plan_p_W`` by laws that plan over a horizon.
         """
         return None
+
+    def plan_step_s(self) -> float:
+        """Time between the points of :meth:`planned_path` (s): the law's step; 1 s for laws without one."""
+        return 1.0

@@ -251,6 +251,10 @@ class FastMpcGuidance(Guidance):
         self._u_lo = np.array([config.v_min, -config.omega_max])
         self._u_hi = np.array([config.v_max, config.omega_max])
 
+    def plan_step_s(self) -> float:
+        """Time between the points of :meth:`planned_path` (s): the planner's step."""
+        return float(self.config.dt)
+
     def planned_path(self) -> np.ndarray | None:
         """(M, 2) positions of the last plan at t + kT, k = 1..M (nonlinear rollout of the planned inputs) (m)."""
         return None if self._plan is None else self._plan[1:, :2].copy()

@@ -129,6 +129,10 @@ class NmpcStandoffGuidance(Guidance):
             raise ValueError(f"count must be >= 0, got {count}")
         self._inject += int(count)
 
+    def plan_step_s(self) -> float:
+        """Time between the points of :meth:`planned_path` (s): the planner's step."""
+        return float(self.config.dt)
+
     def planned_path(self) -> np.ndarray | None:
         """(N, 2) planned horizontal positions at t + k T, k = 1..N (m), t the time of the last command.
 

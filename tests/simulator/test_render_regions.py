@@ -149,9 +149,7 @@ def test_a_snapshot_writes_shared_sets_once():
     from simulator.search_team import _snapshot
 
     def slot(uav, X, Xbar):
-        sets = SimpleNamespace(X=shapely.from_wkt(X), Xbar=shapely.from_wkt(Xbar))
-        return SimpleNamespace(uav=uav, agent=SimpleNamespace(estimator=SimpleNamespace(
-            estimator=SimpleNamespace(estimate=sets))))
+        return uav, SimpleNamespace(X=shapely.from_wkt(X), Xbar=shapely.from_wkt(Xbar))
 
     a, b = "POLYGON ((0 0, 1 0, 1 1, 0 0))", "POLYGON ((0 0, 5 0, 5 5, 0 0))"
     line = _snapshot([slot(0, a, b), slot(1, b, a), slot(2, a, b), slot(3, b, a), slot(4, a, a)])

@@ -115,6 +115,10 @@ class RoadConstrainedTracker(SingleTargetTracker):
             return None
         return self.filter.dominant.road_id
 
+    def road_held(self) -> str:
+        """Road the target is held on (:attr:`road_id` while :attr:`on_road`), "" otherwise."""
+        return (self.road_id or "") if self.on_road else ""
+
     def hypotheses(self) -> list[tuple[str, float]]:
         """(road id of the active segment, normalised weight) of each live hypothesis."""
         if not isinstance(self.filter, RoadNetworkFilter):

@@ -176,6 +176,10 @@ class FormationGuidance(Guidance):
         self.agent_id = int(agent_id)
         self.last_step: FormationStep | None = None
 
+    def plan_step_s(self) -> float:
+        """The law's step (s); it shares no planned path."""
+        return float(self.config.dt)
+
     def command(self, own: OwnState, target: TargetEstimate | None, teammates: Sequence[TeammateState],
                 t: float) -> VelocitySetpoint:
         """Velocity set-point; with no target estimate, or teammates missing, hold position at the altitude."""

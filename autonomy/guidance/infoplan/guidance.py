@@ -106,6 +106,10 @@ class InfoPlannerGuidance(Guidance):
             course += min(1.0, s - k) * turn  # the heading rate is constant along an arc
         return p, float(wrap_angle(course))
 
+    def plan_step_s(self) -> float:
+        """Time between the points of :meth:`planned_path` (s): the planner's step."""
+        return float(self.config.dt)
+
     def planned_path(self) -> np.ndarray | None:
         """(T_p, 2) own planned positions at the planner's steps after the last command (m)."""
         if self.last_plan is None:

@@ -106,6 +106,10 @@ class SetMembershipSearchGuidance(Guidance):
         vz = cfg.altitude_gain * (cfg.altitude - float(own.p_W[2]))
         return VelocitySetpoint(v_W=np.array([v_xy[0], v_xy[1], vz]), yaw=psi)
 
+    def plan_step_s(self) -> float:
+        """Time between the points of :meth:`planned_path` (s): the planner's step."""
+        return float(self.planner.config.dt)
+
     def planned_path(self) -> np.ndarray | None:
         """(h, 2) positions (m) planned by the last command, shared with the teammates."""
         return None if self.last_decision is None else self.last_decision.path.p_xy.copy()

@@ -1,0 +1,177 @@
+"""The record side of the tick: truth, detections and agent rows in their streams (:mod:`simulator.streams`),
+collision checks and events."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Protocol
+
+import numpy as np
+import pybullet as p
+
+from autonomy.agent import AgentOutput, TargetEstimator
+from autonomy.diagnostics import CountsSensorUse, HoldsRoad
+from interfaces.setpoints import UnicycleSetpoint, VelocitySetpoint
+from interfaces.state import TargetEstimate
+from autonomy.sensing.measurement import SensorOutput
+from simulator.comms import Outage
+from simulator.record import RunRecorder
+from simulator.scene import Scene
+from simulator.streams import STREAMS
+from simulator.truth import GroundFleet, UavFleet
+
+__all__ = ["ContactSource", "PybulletContacts", "Recording", "estimate_row"]
+
+_ESTIMATES, _COMMANDS = STREAMS["estimates"], STREAMS["commands"]
+
+
+class ContactSource(Protocol):
+    """Which bodies touch the UAVs now, and what each body is."""
+
+    def contacts(self) -> set[tuple[int, int]]:
+        """(UAV index, other body id) of every contact of a UAV now."""
+        ...
+
+    def body_name(self, body: int) -> str:
+        """What ``body`` is: ``ground``, ``building``, ``uav <id>``, ``vehicle <id>``."""
+        ...
+
+
+class PybulletContacts:
+    """:class:`ContactSource` of a PyBullet scene."""
+
+    def __init__(self, scene: Scene, quads: UavFleet, cars: GroundFleet | None, uav_ids: Sequence[str],
+                 car_ids: Sequence[str]) -> None:
+        self.client = scene.client
+        self.quads = quads
+        names = {scene.ground_id: "ground"}
+        names.update({b: "building" for b in scene.building_ids})
+        names.update({int(b): f"uav {u}" for b, u in zip(quads.body_ids, uav_ids, strict=True)})
+        if cars is not None:
+            names.update({int(b): f"vehicle {c}" for b, c in zip(cars.body_ids, car_ids, strict=True)})
+        self.names = names
+
+    def contacts(self) -> set[tuple[int, int]]:
+        return {(i, c[2]) for i, body in enumerate(self.quads.body_ids)
+                for c in p.getContactPoints(bodyA=int(body), physicsClientId=self.client)}
+
+    def body_name(self, body: int) -> str:
+        return self.names.get(body, f"body {body}")
+
+
+class Recording:
+    """Writes what the tick produced (module docstring).
+
+    Parameters
+    ----------
+    recorder : RunRecorder
+        The run's record.
+    uav_ids, car_ids : sequence of str
+        The world's UAVs and ground vehicles, in order.
+    contacts : ContactSource | None
+        Collision source; None without UAVs.
+    """
+
+    def __init__(self, recorder: RunRecorder, uav_ids: Sequence[str], car_ids: Sequence[str],
+                 contacts: ContactSource | None) -> None:
+        self.recorder = recorder
+        self.uav_ids = list(uav_ids)
+        self.car_ids = list(car_ids)
+        self.contacts = contacts
+        self.event_counts_by_uav: dict[tuple[str, int], int] = {}
+        self._touching: set[tuple[int, int]] = set()
+
+    def truth(self, tick: int, t: float, quads: UavFleet | None, cars: GroundFleet | None) -> None:
+        """One ``uav_truth`` row per UAV and one ``vehicle_truth`` row per ground vehicle."""
+        if quads is not None:
+            st = quads.state
+            n = len(self.uav_ids)
+            self.recorder.append_rows("uav_truth", {
+                "tick": np.full(n, tick), "t": np.full(n, t), "uav": np.arange(n),
+                "x": st.p_W[:, 0], "y": st.p_W[:, 1], "z": st.p_W[:, 2],
+                "qx": st.q_WB[:, 0], "qy": st.q_WB[:, 1], "qz": st.q_WB[:, 2], "qw": st.q_WB[:, 3],
+                "vx": st.v_W[:, 0], "vy": st.v_W[:, 1], "vz": st.v_W[:, 2]})
+        if cars is not None:
+            st = cars.state
+            n = len(self.car_ids)
+            self.recorder.append_rows("vehicle_truth", {
+                "tick": np.full(n, tick), "t": np.full(n, t), "vehicle": np.arange(n),
+                "x": st.p_W[:, 0], "y": st.p_W[:, 1], "z": st.p_W[:, 2], "yaw": np.asarray(st.yaw),
+                "vx": st.v_W[:, 0], "vy": st.v_W[:, 1], "vz": st.v_W[:, 2],
+                "ax": st.a_W[:, 0], "ay": st.a_W[:, 1], "az": st.a_W[:, 2], "speed": np.asarray(st.speed),
+                "road": np.asarray(list(st.road_id), dtype=str), "s": np.asarray(st.s),
+                "lateral": np.asarray(st.lateral)})
+
+    def detections(self, tick: int, uav: int, sensor: str, out: SensorOutput) -> None:
+        """One ``detections`` row per detection of a scan of UAV ``uav``'s sensor ``sensor``."""
+        for d, tid in zip(out.detections, out.truth_ids, strict=True):
+            z = np.full(4, np.nan)
+            z[: min(4, d.z.size)] = d.z[:4]
+            self.recorder.append("detections", tick=tick, t_meas=d.t_meas, t_arrival=d.t_arrival, uav=uav,
+                                 sensor=sensor, kind=d.model.name, truth_id=int(tid),
+                                 z0=z[0], z1=z[1], z2=z[2], z3=z[3])
+
+    def agent(self, tick: int, t: float, uav: int, estimator: TargetEstimator, result: AgentOutput,
+              fused: bool) -> None:
+        """An agent step's ``estimates`` row, its ``fused_estimates`` row when it ``fused`` and its ``commands``
+        row."""
+        road = estimator.road_held() if isinstance(estimator, HoldsRoad) else ""
+        self.recorder.append("estimates", **estimate_row(tick, t, uav, result.local_estimate,
+                                                         result.used_detections, road))
+        if fused:
+            self.recorder.append("fused_estimates", **estimate_row(tick, t, uav, result.estimate, 0))
+        sp = result.setpoint
+        cmd = _COMMANDS.blank(tick=tick, t=t, uav=uav, kind=type(sp).__name__)
+        if isinstance(sp, UnicycleSetpoint):
+            cmd.update(speed=sp.speed, heading_rate=sp.heading_rate, altitude=sp.altitude)
+        elif isinstance(sp, VelocitySetpoint):
+            cmd.update(vx=sp.v_W[0], vy=sp.v_W[1], vz=sp.v_W[2])
+        self.recorder.append("commands", **cmd)
+
+    def sharing(self, tick: int, t: float, uav: int, estimator: TargetEstimator, received: int,
+                own_sensors: set[str]) -> None:
+        """``measurement_sharing``: per agent step, the teammates' detections delivered to UAV ``uav`` so far
+        (``received``) and those its tracker's updates used so far (counted by the sensor ids that are not among the
+        UAV's ``own_sensors``)."""
+        used: Mapping[str, int] = estimator.used_by_sensor if isinstance(estimator, CountsSensorUse) else {}
+        self.recorder.append("measurement_sharing", tick=tick, t=t, uav=uav, received=received,
+                             own_used=sum(n for k, n in used.items() if k in own_sensors),
+                             mates_used=sum(n for k, n in used.items() if k not in own_sensors))
+
+    def collisions(self, tick: int, t: float) -> None:
+        """A ``collision`` event for each contact of a UAV that began since the last check."""
+        if self.contacts is None:
+            return
+        now = self.contacts.contacts()
+        for i, other in sorted(now - self._touching):
+            self.event(tick, t, {"type": "collision", "uav": i, "uav_id": self.uav_ids[i],
+                                 "other": self.contacts.body_name(other)})
+        self._touching = now
+
+    def outage_events(self, tick: int, t: float, outages: Sequence[Outage]) -> None:
+        """``link_outage_start`` / ``link_outage_end`` at the first and last tick of each scheduled outage."""
+        for a, b, start, end in outages:
+            if tick == max(start, 1):
+                self.event(tick, t, {"type": "link_outage_start", "link": [a, b]})
+            elif tick == end:
+                self.event(tick, t, {"type": "link_outage_end", "link": [a, b]})
+
+    def event(self, tick: int, t: float, ev: dict) -> None:
+        """Append the event ``ev`` (its ``type`` and fields), counted per UAV when it names one."""
+        kind = ev.pop("type")
+        if "uav" in ev:
+            key = (kind, int(ev["uav"]))
+            self.event_counts_by_uav[key] = self.event_counts_by_uav.get(key, 0) + 1
+        self.recorder.event(kind, tick, t, **ev)
+
+
+def estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used: int, road: str = "") -> dict:
+    """One row of ``estimates``; ``road`` is the road a road-constrained estimator holds the target on ("" off the
+    map or for unconstrained estimators)."""
+    row = _ESTIMATES.blank(tick=tick, t=t, uav=uav, valid=est is not None, detections=used, road=road)
+    if est is not None:
+        row.update(x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0], vy=est.v_W[1])
+        if est.P is not None:
+            n = est.p_W.size
+            row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1], pvxvx=est.P[n, n], pvyvy=est.P[n + 1, n + 1])
+    return row

@@ -18,9 +18,6 @@ __all__ = ["check_world"]
 MAX_START_ALTITUDE = 5000.0
 """m: highest start of a UAV; the airframes' rotor and drag data are sea-level figures."""
 
-MAX_START_OFFSET = 50_000.0
-"""m: farthest start of a UAV from the origin in x or y, half the largest terrain (``terrain.size`` <= 100 km)."""
-
 TRACKER_TARGET_HEIGHT = 0.0
 """m: the tracker's default ``target_height`` (``autonomy.estimation.tracker.TrackerConfig``; not imported here, where
 worlds are checked without building anything)."""
@@ -92,6 +89,7 @@ def check_world(world: World) -> list[WorldIssue]:
         if not has_roads:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
                                      "a road network in 'roads' for the vehicle to drive on"))
+    issues.extend(_road_issues(world))
     issues.extend(_hcmci_issues(world))
     issues.extend(_formation_imm_issues(world))
     issues.extend(_search_issues(world))
@@ -117,21 +115,53 @@ def check_world(world: World) -> list[WorldIssue]:
 
 
 def _start_issues(world: World) -> list[WorldIssue]:
-    """Each UAV starts as a known airframe above the ground, no higher than :data:`MAX_START_ALTITUDE` and no farther
-    from the origin than :data:`MAX_START_OFFSET`. (``terrain.size`` is the visual extent of the ground: its collision
-    plane is infinite, and shipped worlds fly beyond the visual edge, so it bounds no start.)"""
+    """Each UAV starts as a known airframe above the ground, no higher than :data:`MAX_START_ALTITUDE` (the schema
+    keeps x and y within 50 km of the origin). ``terrain.size`` is the visual extent of the ground: its collision
+    plane is infinite, and shipped worlds fly beyond the visual edge, so it bounds no start."""
     issues: list[WorldIssue] = []
     for i, uav in enumerate(world.uavs):
         if uav.airframe not in AIRFRAMES:
             issues.append(WorldIssue(f"uavs[{i}].airframe", uav.airframe,
                                      f"one of the airframes of vehicles/airframes ({', '.join(AIRFRAMES)})"))
-        x, y, z = uav.initial.position
-        if max(abs(x), abs(y)) > MAX_START_OFFSET:
-            issues.append(WorldIssue(f"uavs[{i}].initial.position", list(uav.initial.position),
-                                     f"a start within {MAX_START_OFFSET / 1000:g} km of the origin in x and y"))
+        z = uav.initial.position[2]
         if not 0.0 < z <= MAX_START_ALTITUDE:
             issues.append(WorldIssue(f"uavs[{i}].initial.position", list(uav.initial.position),
                                      f"a start above the ground: 0 < z <= {MAX_START_ALTITUDE:g} m"))
+    return issues
+
+
+def _road_issues(world: World) -> list[WorldIssue]:
+    """A network given as ``streets`` builds (no street of zero length, no vertex repeated ...) and every route names
+    roads of the network (street ``s`` gives roads ``s.f`` and, two-way, ``s.r``; a procedural town's ids follow
+    from its grid). A map extract's routes are checked when its geometry is built
+    (:func:`worlds.build.build_geometry`), still before the physics starts."""
+    roads = world.roads
+    if roads.streets:
+        from worlds.roads.network import RoadNetwork
+
+        spec = {"nodes": {k: list(v) for k, v in roads.nodes.items()},
+                "streets": [s.model_dump() for s in roads.streets]}
+        try:
+            road_ids = list(RoadNetwork.from_spec(spec).roads)
+        except ValueError as exc:
+            return [WorldIssue("roads.streets", [s.id for s in roads.streets], f"a usable road network ({exc})")]
+    elif roads.town is not None:
+        from worlds.town import TownConfig, town_road_ids
+
+        params = {k: tuple(v) if isinstance(v, list) else v for k, v in (roads.town.model_extra or {}).items()}
+        road_ids = town_road_ids(TownConfig(**params))  # the schema has checked the town's settings
+    else:
+        return []
+    known = set(road_ids)
+    issues = []
+    for i, g in enumerate(world.ground_vehicles):
+        ids = g.route.roads or [g.route.random_walk_from]
+        for k, rid in enumerate(ids):
+            if rid not in known:
+                key = f"ground_vehicles[{i}].route." + (f"roads[{k}]" if g.route.roads else "random_walk_from")
+                sample = ", ".join(road_ids[:6])
+                issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; a street 's' gives "
+                                                   "roads 's.f' and 's.r')"))
     return issues
 
 

@@ -37,7 +37,10 @@ def rate_divisor(rate_hz: float, physics_hz: int) -> int | None:
     if isinstance(rate_hz, bool) or not isinstance(rate_hz, int | float) or not math.isfinite(rate_hz) \
             or rate_hz <= 0:
         return None
-    ratio = Fraction(physics_hz) / Fraction(rate_hz).limit_denominator(MAX_DENOMINATOR)
+    rate = Fraction(rate_hz).limit_denominator(MAX_DENOMINATOR)
+    if rate == 0:  # below 1e-6 Hz: no period of whole ticks worth the name
+        return None
+    ratio = Fraction(physics_hz) / rate
     if ratio.denominator != 1 or ratio.numerator < 1:
         return None
     return int(ratio.numerator)

@@ -59,6 +59,15 @@ NonNegFloat = Annotated[float, Field(ge=0)]
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
 
+WORLD_HALF_EXTENT = 50_000.0
+"""m: every place of a world (road nodes, buildings, decoys, UAV starts, the base station) lies within this distance
+of the origin along each axis, half the largest terrain; the road network is sampled along its length, so a node
+at 1e9 m would ask for a billion samples."""
+
+Coordinate = Annotated[float, Field(ge=-WORLD_HALF_EXTENT, le=WORLD_HALF_EXTENT)]
+Point2 = tuple[Coordinate, Coordinate]
+Point3 = tuple[Coordinate, Coordinate, Coordinate]
+
 
 class Strict(BaseModel):
     """Base for every section: unknown keys are errors; numbers are finite; values are checked on assignment too."""
@@ -79,7 +88,7 @@ class SimSection(Strict):
                             description=f"physics step rate, Hz, in [{MIN_PHYSICS_HZ}, {MAX_PHYSICS_HZ}] (the inner "
                                         "loops and rotor lags step once per tick); every other rate must divide it")
     duration_s: PositiveFloat = Field(60.0, description="simulated duration, s")
-    seed: int = Field(0, ge=0, lt=2**63, description="root of the run's SeedSequence (a 63-bit integer)")
+    seed: int = Field(0, ge=0, description="root of the run's SeedSequence")
     record_hz: int = Field(20, gt=0, description="rate at which truth / estimates / commands are recorded, Hz")
     flush_every_s: PositiveFloat = Field(2.0, description="simulated seconds between flushes of the run record to "
                                                           "disk; at least one physics tick (the record is flushed "
@@ -145,7 +154,8 @@ class TerrainSection(Strict):
 class StreetSpec(Strict):
     id: str
     nodes: tuple[str, str]
-    via: list[Vec2] = Field(default_factory=list, description="intermediate centre-line vertices, m")
+    via: list[Point2] = Field(default_factory=list, description="intermediate centre-line vertices, m, within "
+                                                                "50 km of the origin")
     lanes: int = Field(1, ge=1, le=8, description="lanes per direction (at most 8)")
     lane_width: float = Field(3.5, ge=2.0, le=6.0, description="m, in [2, 6]: narrower than 2 m no car fits, wider "
                                                                "than 6 m is no lane")
@@ -160,14 +170,51 @@ class OsmSection(Strict):
     default_height: PositiveFloat = Field(9.0, description="height of buildings without height tags, m")
 
 
+MAX_TOWN_BLOCKS = 100
+"""Most street-grid blocks of a procedural town along each axis (extent / block_size)."""
+
+
 class TownSection(Strict):
-    """Procedural town; fields map onto ``worlds.town.TownConfig`` (unknown fields are rejected there)."""
+    """Procedural town; fields map onto ``worlds.town.TownConfig``, which checks them here, at load: unknown fields
+    and bad values are errors. At most :data:`MAX_TOWN_BLOCKS` blocks along each axis, building footprints from 1 m
+    to 2 km and heights up to 1 km (as ``buildings``), so that a town stays a town (the generator fills every block
+    with buildings)."""
 
     model_config = ConfigDict(extra="allow")
 
+    @model_validator(mode="after")
+    def _town_config(self) -> TownSection:
+        import dataclasses
+
+        from worlds.town import TownConfig
+
+        params = dict(self.model_extra or {})
+        names = {f.name for f in dataclasses.fields(TownConfig)}
+        unknown = sorted(set(params) - names)
+        if unknown:
+            raise ValueError(f"only fields of TownConfig ({', '.join(sorted(names))}), got {unknown[0]!r}")
+        try:
+            cfg = TownConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in params.items()})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"a valid town ({exc})") from None
+        numbers = [*cfg.extent, cfg.block_size, cfg.lane_width, cfg.speed_limit, cfg.arterial_speed_limit,
+                   cfg.setback, cfg.building_gap, *cfg.footprint_range, *cfg.height_range]
+        if not all(isinstance(v, int | float) and math.isfinite(v) for v in numbers):
+            raise ValueError(f"finite numbers in every town setting, got {params}")
+        blocks = max(cfg.extent) / cfg.block_size
+        if blocks > MAX_TOWN_BLOCKS:
+            raise ValueError(f"at most {MAX_TOWN_BLOCKS} blocks along each axis (extent / block_size), got "
+                             f"{blocks:.4g}")
+        if not (1.0 <= cfg.footprint_range[0] and cfg.footprint_range[1] <= 2000.0):
+            raise ValueError(f"building footprints from 1 m to 2 km (footprint_range), got {list(cfg.footprint_range)}")
+        if cfg.height_range[1] > 1000.0:
+            raise ValueError(f"building heights of at most 1 km (height_range), got {list(cfg.height_range)}")
+        return self
+
 
 class RoadsSection(Strict):
-    nodes: dict[str, Vec2] = Field(default_factory=dict, description="junction positions, m")
+    nodes: dict[str, Point2] = Field(default_factory=dict, description="junction positions, m, within 50 km of the "
+                                                                      "origin")
     streets: list[StreetSpec] = Field(default_factory=list)
     osm: OsmSection | None = None
     town: TownSection | None = None
@@ -184,17 +231,17 @@ class RoadsSection(Strict):
         return self
 
 
-BuildingSide = Annotated[float, Field(gt=0, le=2000.0)]
-"""m: a building's footprint side, > 0 and at most 2 km."""
+BuildingSide = Annotated[float, Field(ge=0.5, le=2000.0)]
+"""m: a building's footprint side, 0.5 m to 2 km (a thinner footprint has no area to cast shadows or block rays)."""
 
-BuildingHeight = Annotated[float, Field(gt=0, le=1000.0)]
-"""m: a building's height, > 0 and at most 1 km (the tallest building stands 828 m)."""
+BuildingHeight = Annotated[float, Field(ge=0.5, le=1000.0)]
+"""m: a building's height, 0.5 m to 1 km (the tallest building stands 828 m)."""
 
 
 class BuildingSpec(Strict):
-    center: Vec2 = Field(description="footprint centre (x, y), m")
+    center: Point2 = Field(description="footprint centre (x, y), m, within 50 km of the origin")
     size: tuple[BuildingSide, BuildingSide, BuildingHeight] = Field(
-        description="(length along yaw, width, height), m: sides in (0, 2000], height in (0, 1000]")
+        description="(length along yaw, width, height), m: sides in [0.5, 2000], height in [0.5, 1000]")
     yaw_deg: float = 0.0
 
 
@@ -306,8 +353,8 @@ class GroundVehicleSpec(Strict):
 
 
 class InitialPose(Strict):
-    position: Vec3 = Field(description="initial position (ENU), m: |x|, |y| <= 50 km and above the ground, "
-                                       "0 < z <= 5000 m (worlds.checks)")
+    position: Point3 = Field(description="initial position (ENU), m: within 50 km of the origin and above the "
+                                         "ground, 0 < z <= 5000 m (worlds.checks)")
     yaw_deg: float = 0.0
 
 
@@ -632,7 +679,8 @@ class CommsSection(Strict):
                                                               "perfect comms it shapes the graph of the team fusions "
                                                               "(hcmci, sets)")
     latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
-    base_station: Vec3 | None = Field(None, description="position of the base station (the radio node 'base'), m")
+    base_station: Point3 | None = Field(None, description="position of the base station (the radio node 'base'), "
+                                                          "m, within 50 km of the origin")
     routing: Literal["mst", "chain"] = Field(
         "mst", description="routes to the base station: the minimum spanning tree of link weights −ln Pr at each step "
                            "(mst), or the fixed relay chain in the order of uavs (chain: uavs[k] relays through "
@@ -663,7 +711,7 @@ class DecoySpec(Strict):
     [12°, 36°] and tilts the axis by the aperture (``tilt_deg`` left out = twice the half-angle)."""
 
     id: str
-    position: Vec3 = Field(description="centre of the decoy's body, m")
+    position: Point3 = Field(description="centre of the decoy's body, m, within 50 km of the origin")
     yaw_deg: float = Field(0.0, description="azimuth of the visibility cone's axis, and heading of the body, deg")
     cone_half_angle_deg: float = Field(45.0, gt=0, le=180, description="half-angle of the visibility cone")
     tilt_deg: float | None = Field(None, ge=0, le=180, description="angle of the cone's axis from the vertical, deg "

@@ -11,7 +11,8 @@ from worlds.rates import divisor, rate_divisor, whole_ticks
 
 
 @pytest.mark.parametrize("rate, expected", [(48, 5), (240, 1), (2, 120), (0.5, 480), (7, None), (480, None),
-                                            (0, None), (-48, None), (float("nan"), None), (float("inf"), None),
+                                            (0, None), (-48, None), (1e-300, None), (1e300, None),
+                                            (float("nan"), None), (float("inf"), None),
                                             (True, None), ("48", None)])
 def test_rate_divisor(rate, expected):
     assert rate_divisor(rate, 240) == expected

@@ -76,7 +76,8 @@ def test_the_driver_rate_mistake_says_where_the_hidden_rate_comes_from():
     (("comms.latency_s=0.001",), "comms.latency_s", "a whole number of physics ticks"),
     (("uavs[0].airframe=blimp",), "uavs[0].airframe", "crazyflie, survey_quad"),
     (("uavs[0].initial.position=[0, 0, -1]",), "uavs[0].initial.position", "0 < z <= 5000 m"),
-    (("uavs[0].initial.position=[1e9, 0, 60]",), "uavs[0].initial.position", "within 50 km of the origin"),
+    (("uavs[0].initial.position=[1.0e9, 0, 60]",), "uavs[0].initial.position[0]", "less than or equal to 50000"),
+    (("roads.nodes.a=[1.0e9, 0]",), "roads.nodes.a[0]", "less than or equal to 50000"),
     (("environment.gravity=1e9",), "environment.gravity", "less than or equal to 20"),
     (("environment.wind.turbulence.sigma=50",), "environment.wind.turbulence.sigma", "less than or equal to 5"),
     (("buildings[0].size=[70, 50, 1e9]",), "buildings[0].size[2]", "less than or equal to 1000"),
@@ -84,8 +85,46 @@ def test_the_driver_rate_mistake_says_where_the_hidden_rate_comes_from():
     (("sim.physics_hz=100000",), "sim.physics_hz", "less than or equal to 2400"),
     (("ground_vehicles[0].driver.path_horizon=1e9",), "ground_vehicles[0].driver.path_horizon",
      "less than or equal to 2000"),
+    (("roads.nodes.b=[0, 0]",), "roads.streets", "a usable road network (street 'south'"),
+    (("ground_vehicles[0].route.random_walk_from=nowhere.f",), "ground_vehicles[0].route.random_walk_from",
+     "a road id of the network (e.g. south.f"),
+    (("buildings[0].size=[1e-300, 50, 25]",), "buildings[0].size[0]", "greater than or equal to 0.5"),
+    (("uavs[0].sensors[0].rate_hz=1e-300",), "uavs[0].sensors[0].rate_hz", "divides sim.physics_hz=240"),
 ])
 def test_other_hidden_rules_and_physical_ranges_are_refused(overrides, path, expected):
     with pytest.raises(WorldError) as info:
         load_world("demo", list(overrides))
     assert any(i.path == path and expected in i.expected for i in info.value.issues), str(info.value)
+
+
+@pytest.mark.parametrize("override, expected", [
+    ("roads.town.block_size=1.0e-300", "at most 100 blocks along each axis"),
+    ("roads.town.block_size=.nan", "a valid town (TownConfig.block_size must be > 0 m, got nan)"),
+    ("roads.town.bogus=1", "only fields of TownConfig"),
+    ("roads.town.footprint_range=[1.0e-300, 1]", "building footprints from 1 m to 2 km"),
+    ("roads.town.height_range=[6, 1.0e9]", "building heights of at most 1 km"),
+])
+
+
+def test_town_settings_are_checked_at_load(override, expected):
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", [override])
+    issue = info.value.issues[0]
+    assert issue.path == "roads.town" and expected in issue.expected, str(info.value)
+
+
+def test_routes_in_a_town_name_its_roads():
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", ["ground_vehicles[0].route.random_walk_from=h9_9.f"])
+    issue = info.value.issues[0]
+    assert issue.path == "ground_vehicles[0].route.random_walk_from" and "a road id of the network" in issue.expected
+
+
+def test_town_road_ids_are_the_generated_ones():
+    import numpy as np
+
+    from worlds.town import TownConfig, generate_town, town_road_ids
+
+    for cfg in (TownConfig(), TownConfig(extent=(300.0, 520.0), block_size=100.0, arterial_every=2)):
+        for seed in (0, 1):
+            assert sorted(generate_town(cfg, np.random.default_rng(seed)).network.roads) == sorted(town_road_ids(cfg))

@@ -650,7 +650,8 @@ class UavSpec(Strict):
     id: str
     airframe: str = "survey_quad"
     initial: InitialPose
-    outer_loop_hz: int = Field(48, gt=0, description="velocity/position loop rate, Hz; must divide sim.physics_hz")
+    outer_loop_hz: int = Field(48, gt=0, description="velocity/position loop rate, Hz; must divide sim.physics_hz "
+                                                     "and be the same for every UAV (one fleet)")
     sensors: list[SensorSpec] = Field(default_factory=list)
     autonomy: AutonomySpec = Field(default_factory=AutonomySpec)
 

@@ -2,7 +2,8 @@
 
 A mutant replaces the value at a random key path of a shipped world's YAML (or adds an unknown key to a mapping) with
 one from a pool of troublemakers: not-a-number, infinities, zero, negative, tiny and huge numbers, wrong types, empty
-containers, unknown names. The loader may refuse it (``WorldError``: the file, the key path, the value and what was
+containers, unknown names; or, at a number, with a nearby one (doubled, halved, plus one, negated), which the loader
+accepts more often, so that more mutants run. The loader may refuse it (``WorldError``: the file, the key path, the value and what was
 expected); if it accepts it, a short run of it must end ``completed``: no world the loader accepts is rejected by
 the run, and no mistake surfaces only after the physics engine has started.
 
@@ -69,10 +70,14 @@ def mutants(draw: st.DrawFn) -> tuple[str, tuple, object, dict]:
     name = draw(st.sampled_from(FUZZ_WORLDS))
     raw = copy.deepcopy(RAW[name])
     loc = draw(st.sampled_from(PATHS[name]))
-    value = copy.deepcopy(draw(st.sampled_from(POOL)))
     node = raw
     for key in loc[:-1]:
         node = node[key]
+    old = node[loc[-1]]
+    if isinstance(old, int | float) and not isinstance(old, bool) and draw(st.booleans()):
+        value = draw(st.sampled_from((old * 2, old / 2, old + 1, -old)))
+    else:
+        value = copy.deepcopy(draw(st.sampled_from(POOL)))
     if isinstance(node[loc[-1]], dict) and draw(st.booleans()):
         node[loc[-1]]["bogus_key"] = value  # an unknown key
         loc = loc + ("bogus_key",)

@@ -3,9 +3,9 @@
 A mutant replaces the value at a random key path of a shipped world's YAML (or adds an unknown key to a mapping) with
 one from a pool of troublemakers: not-a-number, infinities, zero, negative, tiny and huge numbers, wrong types, empty
 containers, unknown names; or, at a number, with a nearby one (doubled, halved, plus one, negated), which the loader
-accepts more often, so that more mutants run. The loader may refuse it (``WorldError``: the file, the key path, the value and what was
-expected); if it accepts it, a short run of it must end ``completed``: no world the loader accepts is rejected by
-the run, and no mistake surfaces only after the physics engine has started.
+accepts more often, so that more mutants run. The loader may refuse it (``WorldError``: the file, the key path, the
+value and what was expected); if it accepts it, a short run of it must end ``completed``: no world the loader
+accepts is rejected by the run, and no mistake surfaces only after the physics engine has started.
 
 One exception, :data:`BUILT_BY_COMPONENTS`: a UAV's sensors and autonomy settings are checked in full by the
 component configs they build (``RadarConfig``, ``TrackerConfig`` ...: cross-field rules such as ``pfa < pd_ref``, and

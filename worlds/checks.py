@@ -133,18 +133,21 @@ def _start_issues(world: World) -> list[WorldIssue]:
 def _road_issues(world: World) -> list[WorldIssue]:
     """A network given as ``streets`` builds (no street of zero length, no vertex repeated ...) and every route names
     roads of the network (street ``s`` gives roads ``s.f`` and, two-way, ``s.r``; a procedural town's ids follow
-    from its grid). A map extract's routes are checked when its geometry is built
-    (:func:`worlds.build.build_geometry`), still before the physics starts."""
+    from its grid) and, on streets, starts within its first road. A map extract's routes are checked when its
+    geometry is built (:func:`worlds.build.build_geometry`), still before the physics starts."""
     roads = world.roads
+    lengths: dict[str, float] = {}
     if roads.streets:
         from worlds.roads.network import RoadNetwork
 
         spec = {"nodes": {k: list(v) for k, v in roads.nodes.items()},
                 "streets": [s.model_dump() for s in roads.streets]}
         try:
-            road_ids = list(RoadNetwork.from_spec(spec).roads)
+            network = RoadNetwork.from_spec(spec)
         except ValueError as exc:
             return [WorldIssue("roads.streets", [s.id for s in roads.streets], f"a usable road network ({exc})")]
+        road_ids = list(network.roads)
+        lengths = {rid: road.length for rid, road in network.roads.items()}
     elif roads.town is not None:
         from worlds.town import TownConfig, town_road_ids
 
@@ -162,6 +165,11 @@ def _road_issues(world: World) -> list[WorldIssue]:
                 sample = ", ".join(road_ids[:6])
                 issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; a street 's' gives "
                                                    "roads 's.f' and 's.r')"))
+        first = ids[0]
+        if first in lengths and g.route.start_s > lengths[first]:
+            issues.append(WorldIssue(f"ground_vehicles[{i}].route.start_s", g.route.start_s,
+                                     f"a start on the first road: at most its length, {lengths[first]:.1f} m of "
+                                     f"{first!r}"))
     return issues
 
 

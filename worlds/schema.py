@@ -285,7 +285,7 @@ class DriverSpec(Strict):
     path_horizon: float = Field(150.0, gt=0, le=2000.0,
                                 description="lane path kept built ahead of the car, m, at most 2 km (the path is "
                                             "sampled every path_ds and rebuilt as the car drives)")
-    path_ds: float = Field(1.0, ge=0.1, le=10.0, description="lane-path sample spacing, m, in [0.1, 10]")
+    path_ds: float = Field(1.0, ge=0.05, le=10.0, description="lane-path sample spacing, m, in [0.05, 10]")
     corner_length: PositiveFloat = Field(7.0, description="junction corner: metres cut from each side of a junction "
                                                           "and replaced by a smooth turn, m")
     stop_probability: float = Field(1.0, ge=0, le=1, description="probability of stopping at a junction when the "

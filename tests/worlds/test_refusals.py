@@ -90,6 +90,8 @@ def test_the_driver_rate_mistake_says_where_the_hidden_rate_comes_from():
      "a road id of the network (e.g. south.f"),
     (("buildings[0].size=[1e-300, 50, 25]",), "buildings[0].size[0]", "greater than or equal to 0.5"),
     (("uavs[0].sensors[0].rate_hz=1e-300",), "uavs[0].sensors[0].rate_hz", "divides sim.physics_hz=240"),
+    (("ground_vehicles[0].route.start_s=1.0e9",), "ground_vehicles[0].route.start_s",
+     "a start on the first road: at most its length, 300.0 m of 'south.f'"),
 ])
 def test_other_hidden_rules_and_physical_ranges_are_refused(overrides, path, expected):
     with pytest.raises(WorldError) as info:

@@ -19,7 +19,6 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
-import pytest
 import yaml
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
@@ -89,7 +88,6 @@ def mutants(draw: st.DrawFn) -> tuple[str, tuple, object, dict]:
 STATS = {"tried": 0, "accepted": 0}
 
 
-@pytest.mark.slow
 @settings(max_examples=60, derandomize=True, deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(mutant=mutants())

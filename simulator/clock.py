@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from worlds.checks import rate_divisor
+from worlds.rates import divisor
 
 __all__ = ["Clock"]
 
@@ -40,8 +40,5 @@ class Clock:
 
     def divisor(self, rate_hz: float, what: str = "rate_hz") -> int:
         """Ticks between events at ``rate_hz``; raises ``ValueError`` naming ``what`` if it does not divide the physics
-        rate."""
-        d = rate_divisor(rate_hz, self.physics_hz)
-        if d is None:
-            raise ValueError(f"{what} = {rate_hz} Hz does not divide physics_hz = {self.physics_hz} into whole ticks")
-        return d
+        rate (the one rule of :func:`worlds.rates.divisor`, by which the loader checks every rate of a world)."""
+        return divisor(rate_hz, self.physics_hz, what)

@@ -263,11 +263,9 @@ def fleet_options(world: World) -> Any:
         length = (200.0, 200.0, 50.0) if turb is None else (turb.length_scale,) * 3
         airspeed = max(1.0, math.hypot(*env.wind.mean_W[:2]))
         wind = WindConfig(mean_W=tuple(env.wind.mean_W), sigma=sigma, length_scale=length, airspeed=airspeed)
-    rates = {u.outer_loop_hz for u in world.uavs}
-    if len(rates) > 1:
-        raise ValueError(f"all UAVs must share one outer_loop_hz, got {sorted(rates)}")
+    # one outer-loop rate for the fleet: worlds.checks refuses a world whose UAVs differ
     return FleetOptions(wind=wind, downwash=env.downwash, ground_effect=env.ground_effect,
-                        outer_loop_hz=rates.pop() if rates else 48)
+                        outer_loop_hz=world.uavs[0].outer_loop_hz if world.uavs else FleetOptions().outer_loop_hz)
 
 
 def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
@@ -280,10 +278,7 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
     params, drivers, routes = [], [], []
     for g in world.ground_vehicles:
         params.append(load_car(g.type))
-        overrides = dict(g.driver)
-        if not g.route.stop_at_junctions:
-            overrides.setdefault("stop_probability", 0.0)
-        drivers.append(DriverConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in overrides.items()}))
+        drivers.append(DriverConfig(**g.driver.model_dump()))  # the schema's model, field by field
         where = dict(start_s=g.route.start_s, lane=g.route.lane)
         if g.route.roads is not None:
             routes.append(Route(roads=tuple(g.route.roads), **where))

@@ -1,33 +1,26 @@
-"""Whole-world checks the per-section schema cannot make: rates that divide the physics rate, unique ids, references."""
+"""Whole-world checks the per-section schema cannot make: rates that divide the physics rate (the hidden ones too:
+the car driver's), periods of whole ticks, UAVs starting inside the terrain, unique ids, references between sections.
+
+Every rate is judged by :func:`worlds.rates.rate_divisor`, the rule the clock and the vehicles' fleets apply too.
+"""
 
 from __future__ import annotations
 
 from collections import Counter
-from fractions import Fraction
 
+from worlds.catalog import AIRFRAMES
 from worlds.errors import WorldIssue
+from worlds.rates import divisors_text, rate_divisor, whole_ticks
 from worlds.schema import InfoPlanSpec, World
 
-__all__ = ["check_world", "rate_divisor"]
+__all__ = ["check_world"]
+
+MAX_START_ALTITUDE = 5000.0
+"""m: highest start of a UAV; the airframes' rotor and drag data are sea-level figures."""
 
 TRACKER_TARGET_HEIGHT = 0.0
 """m: the tracker's default ``target_height`` (``autonomy.estimation.tracker.TrackerConfig``; not imported here, where
 worlds are checked without building anything)."""
-
-
-def rate_divisor(rate_hz: float, physics_hz: int) -> int | None:
-    """Ticks between events of a component at ``rate_hz``, or None if ``rate_hz`` does not divide ``physics_hz``."""
-    if rate_hz <= 0:
-        return None
-    ratio = Fraction(physics_hz) / Fraction(rate_hz).limit_denominator(10**6)
-    if ratio.denominator != 1 or ratio.numerator < 1:
-        return None
-    return int(ratio.numerator)
-
-
-def _divisors_text(physics_hz: int) -> str:
-    divs = [d for d in range(1, physics_hz + 1) if physics_hz % d == 0]
-    return ", ".join(f"{physics_hz // d:g}" for d in divs[:12])
 
 
 def check_world(world: World) -> list[WorldIssue]:
@@ -35,19 +28,37 @@ def check_world(world: World) -> list[WorldIssue]:
     issues: list[WorldIssue] = []
     hz = world.sim.physics_hz
 
-    def rate(path: str, value: float) -> None:
+    def rate(path: str, value: float, note: str = "") -> None:
         if rate_divisor(value, hz) is None:
             issues.append(WorldIssue(path, value, f"a rate in Hz that divides sim.physics_hz={hz} into whole ticks "
-                                                  f"(e.g. {_divisors_text(hz)})"))
+                                                  f"(e.g. {divisors_text(hz)}){note}"))
 
     rate("sim.record_hz", world.sim.record_hz)
+    if round(world.sim.flush_every_s * hz) < 1:
+        issues.append(WorldIssue("sim.flush_every_s", world.sim.flush_every_s,
+                                 f"at least one physics tick, {1 / hz:.6g} s at sim.physics_hz={hz}: the record is "
+                                 "flushed every round(flush_every_s * physics_hz) ticks"))
+    for i, g in enumerate(world.ground_vehicles):
+        given = "rate_hz" in g.driver.model_fields_set
+        rate(f"ground_vehicles[{i}].driver.rate_hz", g.driver.rate_hz,
+             "" if given else f"; the driver's default is {g.driver.rate_hz} Hz: give ground_vehicles[{i}].driver."
+                              "rate_hz one that divides the physics rate")
+    if world.comms.latency_s is not None and whole_ticks(world.comms.latency_s, hz) is None:
+        issues.append(WorldIssue("comms.latency_s", world.comms.latency_s,
+                                 f"a whole number of physics ticks (multiples of {1 / hz:.6g} s at "
+                                 f"sim.physics_hz={hz})"))
     # render.fps needs no divisor check: the video is replayed from the record, interpolated to each frame's time
     if world.uavs and world.render.uav >= len(world.uavs):
         n = len(world.uavs)
         issues.append(WorldIssue("render.uav", world.render.uav,
                                  f"the index of one of the world's {n} UAVs (0 .. {n - 1})"))
+    issues.extend(_start_issues(world))
     for i, uav in enumerate(world.uavs):
         rate(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz)
+        if uav.outer_loop_hz != world.uavs[0].outer_loop_hz:
+            issues.append(WorldIssue(f"uavs[{i}].outer_loop_hz", uav.outer_loop_hz,
+                                     f"{world.uavs[0].outer_loop_hz}, the outer_loop_hz of uavs[0]: the UAVs' "
+                                     "outer loops run in one fleet at one rate"))
         rate(f"uavs[{i}].autonomy.rate_hz", uav.autonomy.rate_hz)
         for j, sensor in enumerate(uav.sensors):
             rate(f"uavs[{i}].sensors[{j}].rate_hz", sensor.rate_hz)
@@ -78,6 +89,7 @@ def check_world(world: World) -> list[WorldIssue]:
         if not has_roads:
             issues.append(WorldIssue(f"ground_vehicles[{i}].route", g.route.model_dump(exclude_none=True),
                                      "a road network in 'roads' for the vehicle to drive on"))
+    issues.extend(_road_issues(world))
     issues.extend(_hcmci_issues(world))
     issues.extend(_formation_imm_issues(world))
     issues.extend(_search_issues(world))
@@ -99,6 +111,65 @@ def check_world(world: World) -> list[WorldIssue]:
                                          f"({sorted(link_nodes)})"))
         if pair[0] == pair[1]:
             issues.append(WorldIssue(f"comms.links[{i}]", list(pair), "two different UAV ids"))
+    return issues
+
+
+def _start_issues(world: World) -> list[WorldIssue]:
+    """Each UAV starts as a known airframe above the ground, no higher than :data:`MAX_START_ALTITUDE` (the schema
+    keeps x and y within 50 km of the origin). ``terrain.size`` is the visual extent of the ground: its collision
+    plane is infinite, and shipped worlds fly beyond the visual edge, so it bounds no start."""
+    issues: list[WorldIssue] = []
+    for i, uav in enumerate(world.uavs):
+        if uav.airframe not in AIRFRAMES:
+            issues.append(WorldIssue(f"uavs[{i}].airframe", uav.airframe,
+                                     f"one of the airframes of vehicles/airframes ({', '.join(AIRFRAMES)})"))
+        z = uav.initial.position[2]
+        if not 0.0 < z <= MAX_START_ALTITUDE:
+            issues.append(WorldIssue(f"uavs[{i}].initial.position", list(uav.initial.position),
+                                     f"a start above the ground: 0 < z <= {MAX_START_ALTITUDE:g} m"))
+    return issues
+
+
+def _road_issues(world: World) -> list[WorldIssue]:
+    """A network given as ``streets`` builds (no street of zero length, no vertex repeated ...) and every route names
+    roads of the network (street ``s`` gives roads ``s.f`` and, two-way, ``s.r``; a procedural town's ids follow
+    from its grid) and, on streets, starts within its first road. A map extract's routes are checked when its
+    geometry is built (:func:`worlds.build.build_geometry`), still before the physics starts."""
+    roads = world.roads
+    lengths: dict[str, float] = {}
+    if roads.streets:
+        from worlds.roads.network import RoadNetwork
+
+        spec = {"nodes": {k: list(v) for k, v in roads.nodes.items()},
+                "streets": [s.model_dump() for s in roads.streets]}
+        try:
+            network = RoadNetwork.from_spec(spec)
+        except ValueError as exc:
+            return [WorldIssue("roads.streets", [s.id for s in roads.streets], f"a usable road network ({exc})")]
+        road_ids = list(network.roads)
+        lengths = {rid: road.length for rid, road in network.roads.items()}
+    elif roads.town is not None:
+        from worlds.town import TownConfig, town_road_ids
+
+        params = {k: tuple(v) if isinstance(v, list) else v for k, v in (roads.town.model_extra or {}).items()}
+        road_ids = town_road_ids(TownConfig(**params))  # the schema has checked the town's settings
+    else:
+        return []
+    known = set(road_ids)
+    issues = []
+    for i, g in enumerate(world.ground_vehicles):
+        ids = g.route.roads or [g.route.random_walk_from]
+        for k, rid in enumerate(ids):
+            if rid not in known:
+                key = f"ground_vehicles[{i}].route." + (f"roads[{k}]" if g.route.roads else "random_walk_from")
+                sample = ", ".join(road_ids[:6])
+                issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; a street 's' gives "
+                                                   "roads 's.f' and 's.r')"))
+        first = ids[0]
+        if first in lengths and g.route.start_s > lengths[first]:
+            issues.append(WorldIssue(f"ground_vehicles[{i}].route.start_s", g.route.start_s,
+                                     f"a start on the first road: at most its length, {lengths[first]:.1f} m of "
+                                     f"{first!r}"))
     return issues
 
 

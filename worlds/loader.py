@@ -2,9 +2,10 @@
 
 ``load_world("road_standoff")`` finds ``worlds/road_standoff.yaml`` shipped with the package; any other argument is a
 path.
-Every problem — missing file, bad YAML, unknown key, wrong type, out-of-range value, a rate that does not divide the
-physics
-rate — raises :class:`worlds.errors.WorldError` naming the file, the key path, the bad value and what was expected.
+Every problem — missing file, bad YAML, unknown key, wrong type, a number that is not finite or out of its physical
+range, a rate that does not divide the physics rate (the car driver's own rate included), a route naming no road —
+raises :class:`worlds.errors.WorldError` naming the file, the key path, the bad value and what was expected, before
+anything is built.
 """
 
 from __future__ import annotations

@@ -1,15 +1,20 @@
 """The world-file schema: pydantic models for every section of a world file.
 
-Every model forbids unknown keys, so a typo is an error, not a silently ignored setting. Units: SI, except angles, which
-world files give in degrees (``*_deg`` keys) and the code converts at load. Cross-field checks that need the whole world
-(rates dividing the physics rate, references between sections) live in :mod:`worlds.checks`.
+Every model forbids unknown keys, so a typo is an error, not a silently ignored setting, and every number must be
+finite (``.nan`` and ``.inf`` are errors). Units: SI, except angles, which world files give in degrees (``*_deg`` keys)
+and the code converts at load. Physical ranges (wind, gravity, building sizes, the terrain) are bounded where the
+field is declared, with the reason in its description. Cross-field checks that need the whole world (rates dividing
+the physics rate, references between sections, UAVs starting inside the terrain) live in :mod:`worlds.checks`.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from worlds.catalog import CAR_TYPES
 
 __all__ = [
     "AutonomySpec",
@@ -19,6 +24,7 @@ __all__ = [
     "CameraSpec",
     "CommsSection",
     "DecoySpec",
+    "DriverSpec",
     "EnvironmentSection",
     "EstimatorSpec",
     "FormationSpec",
@@ -53,56 +59,107 @@ NonNegFloat = Annotated[float, Field(ge=0)]
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
 
+WORLD_HALF_EXTENT = 50_000.0
+"""m: every place of a world (road nodes, buildings, decoys, UAV starts, the base station) lies within this distance
+of the origin along each axis, half the largest terrain; the road network is sampled along its length, so a node
+at 1e9 m would ask for a billion samples."""
+
+Coordinate = Annotated[float, Field(ge=-WORLD_HALF_EXTENT, le=WORLD_HALF_EXTENT)]
+Point2 = tuple[Coordinate, Coordinate]
+Point3 = tuple[Coordinate, Coordinate, Coordinate]
+
 
 class Strict(BaseModel):
-    """Base for every section: unknown keys are errors; values are checked on assignment too."""
+    """Base for every section: unknown keys are errors; numbers are finite; values are checked on assignment too."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)
+
+
+MIN_PHYSICS_HZ = 100
+"""Hz: the attitude-rate loops and the rotors' first-order lag (time constant 0.015 s for the crazyflie, 0.04 s for
+the survey quad) are stepped once per physics tick; a coarser step than 10 ms leaves no margin on them."""
+
+MAX_PHYSICS_HZ = 2400
+"""Hz: ten times the default 240 Hz; finer steps change no flight and only multiply the run time."""
 
 
 class SimSection(Strict):
-    physics_hz: int = Field(240, gt=0, description="physics step rate, Hz; every other rate must divide it")
+    physics_hz: int = Field(240, ge=MIN_PHYSICS_HZ, le=MAX_PHYSICS_HZ,
+                            description=f"physics step rate, Hz, in [{MIN_PHYSICS_HZ}, {MAX_PHYSICS_HZ}] (the inner "
+                                        "loops and rotor lags step once per tick); every other rate must divide it")
     duration_s: PositiveFloat = Field(60.0, description="simulated duration, s")
     seed: int = Field(0, ge=0, description="root of the run's SeedSequence")
     record_hz: int = Field(20, gt=0, description="rate at which truth / estimates / commands are recorded, Hz")
-    flush_every_s: PositiveFloat = Field(2.0, description="simulated seconds between flushes of the run record to disk")
+    flush_every_s: PositiveFloat = Field(2.0, description="simulated seconds between flushes of the run record to "
+                                                          "disk; at least one physics tick (the record is flushed "
+                                                          "every round(flush_every_s * physics_hz) ticks)")
+
+
+MAX_WIND_SPEED = 25.0
+"""m/s: the fastest shipped airframe (survey_quad, max_speed 20 m/s) holds its position against at most about 24 m/s
+of air: there its drag (0.10 v + 0.020 v^2 N) equals the horizontal thrust at its 37 deg commanded tilt limit. A
+stronger mean wind blows every UAV away; 25 m/s is the bottom of Beaufort 10 (storm)."""
+
+MAX_GUST_SIGMA = 5.0
+"""m/s: MIL-F-8785C's severe low-altitude turbulence (exceeded with probability 1e-5) has a horizontal sigma of about
+3-5 m/s; on top of the mean-wind bound, larger gusts exceed what the airframes can fly through."""
 
 
 class TurbulenceSection(Strict):
-    sigma: NonNegFloat = Field(1.0, description="turbulence intensity (std of each gust component), m/s")
-    length_scale: PositiveFloat = Field(50.0, description="Dryden length scale, m")
+    sigma: float = Field(1.0, ge=0, le=MAX_GUST_SIGMA,
+                         description=f"turbulence intensity (std of each gust component), m/s, in [0, "
+                                     f"{MAX_GUST_SIGMA:g}]: severe low-altitude turbulence (MIL-F-8785C) is 3-5 m/s")
+    length_scale: float = Field(50.0, ge=1.0, le=1000.0,
+                                description="Dryden length scale, m, in [1, 1000]: MIL-F-8785C's scales run from "
+                                            "tens of metres near the ground to 533 m aloft")
 
 
 class WindSection(Strict):
-    mean_W: Vec3 = Field((0.0, 0.0, 0.0), description="constant wind in the world frame (ENU), m/s")
+    mean_W: Vec3 = Field((0.0, 0.0, 0.0), description=f"constant wind in the world frame (ENU), m/s; its speed at "
+                                                      f"most {MAX_WIND_SPEED:g} m/s, about what the fastest shipped "
+                                                      f"airframe (survey_quad) can hold its position against")
     turbulence: TurbulenceSection | None = None
+
+    @field_validator("mean_W")
+    @classmethod
+    def _flyable(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
+        speed = math.sqrt(sum(c * c for c in value))
+        if speed > MAX_WIND_SPEED:
+            raise ValueError(f"a wind of at most {MAX_WIND_SPEED:g} m/s (this one is {speed:.4g} m/s): no shipped "
+                             "airframe holds its position against more (survey_quad, the fastest, about 24 m/s)")
+        return value
 
 
 class EnvironmentSection(Strict):
-    gravity: PositiveFloat = Field(9.81, description="gravitational acceleration, m/s^2")
+    gravity: float = Field(9.81, ge=1.0, le=20.0,
+                           description="gravitational acceleration, m/s^2, in [1, 20]: the crazyflie's rotors lift "
+                                       "2.25 times its Earth weight, so it hovers up to about 22 m/s^2 (20 keeps a "
+                                       "margin to manoeuvre); the Moon's 1.62 is inside")
     wind: WindSection | None = None
     downwash: bool = False
     ground_effect: bool = False
 
 
+TerrainLength = Annotated[float, Field(gt=0, le=100_000.0)]
+"""m: one side of the terrain, > 0 and at most 100 km (a city and its surroundings)."""
+
+
 class TerrainSection(Strict):
     kind: Literal["flat"] = "flat"
-    size: Vec2 = Field((2000.0, 2000.0), description="extent of the ground plane (x, y), m")
-
-    @model_validator(mode="after")
-    def _positive(self) -> TerrainSection:
-        if min(self.size) <= 0:
-            raise ValueError(f"size must be positive, got {list(self.size)}")
-        return self
+    size: tuple[TerrainLength, TerrainLength] = Field(
+        (2000.0, 2000.0), description="extent of the ground plane (x, y), m, centred on the origin; each side in "
+                                      "(0, 100 km]; visual only (the ground's collision plane is infinite)")
 
 
 class StreetSpec(Strict):
     id: str
     nodes: tuple[str, str]
-    via: list[Vec2] = Field(default_factory=list, description="intermediate centre-line vertices, m")
-    lanes: int = Field(1, ge=1, description="lanes per direction")
-    lane_width: PositiveFloat = 3.5
-    speed_limit: PositiveFloat = Field(13.9, description="m/s")
+    via: list[Point2] = Field(default_factory=list, description="intermediate centre-line vertices, m, within "
+                                                                "50 km of the origin")
+    lanes: int = Field(1, ge=1, le=8, description="lanes per direction (at most 8)")
+    lane_width: float = Field(3.5, ge=2.0, le=6.0, description="m, in [2, 6]: narrower than 2 m no car fits, wider "
+                                                               "than 6 m is no lane")
+    speed_limit: float = Field(13.9, gt=0, le=70.0, description="m/s, at most 70 m/s (252 km/h: no road is faster)")
     two_way: bool = True
 
 
@@ -113,14 +170,51 @@ class OsmSection(Strict):
     default_height: PositiveFloat = Field(9.0, description="height of buildings without height tags, m")
 
 
+MAX_TOWN_BLOCKS = 100
+"""Most street-grid blocks of a procedural town along each axis (extent / block_size)."""
+
+
 class TownSection(Strict):
-    """Procedural town; fields map onto ``worlds.town.TownConfig`` (unknown fields are rejected there)."""
+    """Procedural town; fields map onto ``worlds.town.TownConfig``, which checks them here, at load: unknown fields
+    and bad values are errors. At most :data:`MAX_TOWN_BLOCKS` blocks along each axis, building footprints from 1 m
+    to 2 km and heights up to 1 km (as ``buildings``), so that a town stays a town (the generator fills every block
+    with buildings)."""
 
     model_config = ConfigDict(extra="allow")
 
+    @model_validator(mode="after")
+    def _town_config(self) -> TownSection:
+        import dataclasses
+
+        from worlds.town import TownConfig
+
+        params = dict(self.model_extra or {})
+        names = {f.name for f in dataclasses.fields(TownConfig)}
+        unknown = sorted(set(params) - names)
+        if unknown:
+            raise ValueError(f"only fields of TownConfig ({', '.join(sorted(names))}), got {unknown[0]!r}")
+        try:
+            cfg = TownConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in params.items()})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"a valid town ({exc})") from None
+        numbers = [*cfg.extent, cfg.block_size, cfg.lane_width, cfg.speed_limit, cfg.arterial_speed_limit,
+                   cfg.setback, cfg.building_gap, *cfg.footprint_range, *cfg.height_range]
+        if not all(isinstance(v, int | float) and math.isfinite(v) for v in numbers):
+            raise ValueError(f"finite numbers in every town setting, got {params}")
+        blocks = max(cfg.extent) / cfg.block_size
+        if blocks > MAX_TOWN_BLOCKS:
+            raise ValueError(f"at most {MAX_TOWN_BLOCKS} blocks along each axis (extent / block_size), got "
+                             f"{blocks:.4g}")
+        if not (1.0 <= cfg.footprint_range[0] and cfg.footprint_range[1] <= 2000.0):
+            raise ValueError(f"building footprints from 1 m to 2 km (footprint_range), got {list(cfg.footprint_range)}")
+        if cfg.height_range[1] > 1000.0:
+            raise ValueError(f"building heights of at most 1 km (height_range), got {list(cfg.height_range)}")
+        return self
+
 
 class RoadsSection(Strict):
-    nodes: dict[str, Vec2] = Field(default_factory=dict, description="junction positions, m")
+    nodes: dict[str, Point2] = Field(default_factory=dict, description="junction positions, m, within 50 km of the "
+                                                                      "origin")
     streets: list[StreetSpec] = Field(default_factory=list)
     osm: OsmSection | None = None
     town: TownSection | None = None
@@ -137,16 +231,18 @@ class RoadsSection(Strict):
         return self
 
 
-class BuildingSpec(Strict):
-    center: Vec2 = Field(description="footprint centre (x, y), m")
-    size: Vec3 = Field(description="(length along yaw, width, height), m")
-    yaw_deg: float = 0.0
+BuildingSide = Annotated[float, Field(ge=0.5, le=2000.0)]
+"""m: a building's footprint side, 0.5 m to 2 km (a thinner footprint has no area to cast shadows or block rays)."""
 
-    @model_validator(mode="after")
-    def _positive(self) -> BuildingSpec:
-        if min(self.size) <= 0:
-            raise ValueError(f"size must be positive in every axis, got {list(self.size)}")
-        return self
+BuildingHeight = Annotated[float, Field(ge=0.5, le=1000.0)]
+"""m: a building's height, 0.5 m to 1 km (the tallest building stands 828 m)."""
+
+
+class BuildingSpec(Strict):
+    center: Point2 = Field(description="footprint centre (x, y), m, within 50 km of the origin")
+    size: tuple[BuildingSide, BuildingSide, BuildingHeight] = Field(
+        description="(length along yaw, width, height), m: sides in [0.5, 2000], height in [0.5, 1000]")
+    yaw_deg: float = 0.0
 
 
 class RouteSpec(Strict):
@@ -163,12 +259,77 @@ class RouteSpec(Strict):
         return self
 
 
+class DriverSpec(Strict):
+    """Behaviour of one car's road-following driver: the one declaration of its settings.
+    ``vehicles.car.driver_config.DriverConfig`` is this model (frozen, plus the driver's tick arithmetic), so a world
+    file's ``driver:`` keys, their defaults and their bounds are the driver's own."""
+
+    rate_hz: int = Field(40, gt=0, description="driver update rate, Hz; must divide sim.physics_hz")
+    lateral_accel_max: PositiveFloat = Field(
+        2.5, description="largest lateral acceleration v^2 |kappa| the speed profile allows, m/s^2")
+    accel: PositiveFloat = Field(1.5, description="comfortable acceleration a of the speed law and IDM, m/s^2, "
+                                                  "capped by the car's max_accel")
+    decel_plan: PositiveFloat = Field(2.0, description="deceleration of the speed envelope and IDM comfortable "
+                                                       "deceleration b, m/s^2")
+    decel_max: PositiveFloat = Field(6.0, description="hardest braking the driver commands, m/s^2, capped by the "
+                                                      "car's max_decel; >= decel_plan")
+    speed_gain: PositiveFloat = Field(1.5, description="speed-tracking gain k_v, 1/s")
+    stanley_gain: PositiveFloat = Field(2.0, description="Stanley cross-track gain k, 1/s: delta = psi_path - psi - "
+                                                         "atan(k e_front / (v + v_soft))")
+    stanley_softening: PositiveFloat = Field(1.0, description="Stanley softening speed v_soft, m/s")
+    yaw_damping: NonNegFloat = Field(0.05, description="gain on the yaw-rate error, s: delta += -c (omega - v "
+                                                       "kappa_path)")
+    lookahead_margin: float = Field(20.0, gt=0, le=1000.0,
+                                    description="distance beyond the braking distance v^2 / (2 b_plan) scanned for "
+                                                "curvature and stops, m, at most 1 km")
+    path_horizon: float = Field(150.0, gt=0, le=2000.0,
+                                description="lane path kept built ahead of the car, m, at most 2 km (the path is "
+                                            "sampled every path_ds and rebuilt as the car drives)")
+    path_ds: float = Field(1.0, ge=0.05, le=10.0, description="lane-path sample spacing, m, in [0.05, 10]")
+    corner_length: PositiveFloat = Field(7.0, description="junction corner: metres cut from each side of a junction "
+                                                          "and replaced by a smooth turn, m")
+    stop_probability: float = Field(1.0, ge=0, le=1, description="probability of stopping at a junction when the "
+                                                                 "route does not list its stops, in [0, 1]")
+    dwell_range: tuple[NonNegFloat, NonNegFloat] = Field((2.0, 8.0), description="uniform range (min, max) of the "
+                                                                                 "dwell time at a stop, s")
+    stop_window: PositiveFloat = Field(2.5, description="a car slower than stopped_speed within this distance of a "
+                                                        "stop line has stopped there, m")
+    stopped_speed: PositiveFloat = Field(0.3, description="speed below which a car counts as stopped, m/s")
+    cruise_fraction_range: tuple[float, float] = Field(
+        (0.7, 1.0), description="uniform range (min, max) of the cruise speed as a fraction of each road's speed "
+                                "limit, 0 < min <= max <= 1")
+    cruise_change_period: NonNegFloat = Field(30.0, description="mean time between random cruise-speed changes, s, "
+                                                                "exponentially distributed; 0 disables changes")
+    idm_s0: PositiveFloat = Field(2.0, description="IDM standstill gap s0, m, bumper to bumper")
+    idm_time_headway: PositiveFloat = Field(1.5, description="IDM time headway T, s")
+    follow_range: PositiveFloat = Field(80.0, description="distance ahead searched for a leading car, m")
+    random_walk_chunk: int = Field(5, ge=1, le=100, description="roads asked from the network per random-walk "
+                                                                "extension")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> DriverSpec:
+        if self.decel_max < self.decel_plan:
+            raise ValueError(f"decel_max >= decel_plan ({self.decel_plan:g} m/s^2), got decel_max {self.decel_max:g}")
+        lo, hi = self.dwell_range
+        if lo > hi:
+            raise ValueError(f"dwell_range with 0 <= min <= max, got {list(self.dwell_range)}")
+        lo, hi = self.cruise_fraction_range
+        if not (0.0 < lo <= hi <= 1.0):
+            raise ValueError(f"cruise_fraction_range with 0 < min <= max <= 1, got {list(self.cruise_fraction_range)}")
+        if self.path_horizon < 4 * self.corner_length:
+            raise ValueError(f"path_horizon >= 4 x corner_length ({4 * self.corner_length:g} m), got "
+                             f"{self.path_horizon:g}")
+        return self
+
+
 class GroundVehicleSpec(Strict):
     id: str
-    type: str = Field("sedan", description="car parameter file name (vehicles/cars)")
+    type: str = Field("sedan", description=f"car parameter file name (vehicles/cars: {', '.join(CAR_TYPES)})")
     role: Literal["target", "decoy", "traffic"] = "target"
     route: RouteSpec
-    driver: dict[str, Any] = Field(default_factory=dict, description="overrides of the driver configuration")
+    driver: DriverSpec = Field(default_factory=DriverSpec,
+                               description="the driver's settings (defaults: DriverSpec's); with "
+                                           "route.stop_at_junctions false, stop_probability defaults to 0")
     dynamics: Literal["physics", "kinematic"] = Field(
         "physics", description="how the car moves under its driver: 'physics' = a PyBullet multibody (chassis, four "
         "wheel joints with motors, Ackermann steering, tyre contacts); 'kinematic' = a kinematic bicycle model "
@@ -176,9 +337,24 @@ class GroundVehicleSpec(Strict):
         "cameras and contact checks see it; no wheels, tyre slip or contact forces act on it; much cheaper to step). "
         "Same driver, route, lane following, car following and stops either way")
 
+    @field_validator("type")
+    @classmethod
+    def _known_car(cls, value: str) -> str:
+        if value not in CAR_TYPES:
+            raise ValueError(f"one of the car types of vehicles/cars ({', '.join(CAR_TYPES)})")
+        return value
+
+    @model_validator(mode="after")
+    def _no_stops(self) -> GroundVehicleSpec:
+        # the resolved world (model_dump) carries the 0 explicitly, so that it reads the same when loaded again
+        if not self.route.stop_at_junctions and "stop_probability" not in self.driver.model_fields_set:
+            self.driver = DriverSpec(**self.driver.model_dump(exclude_unset=True), stop_probability=0.0)
+        return self
+
 
 class InitialPose(Strict):
-    position: Vec3 = Field(description="initial position (ENU), m")
+    position: Point3 = Field(description="initial position (ENU), m: within 50 km of the origin and above the "
+                                         "ground, 0 < z <= 5000 m (worlds.checks)")
     yaw_deg: float = 0.0
 
 
@@ -474,7 +650,8 @@ class UavSpec(Strict):
     id: str
     airframe: str = "survey_quad"
     initial: InitialPose
-    outer_loop_hz: int = Field(48, gt=0, description="velocity/position loop rate, Hz; must divide sim.physics_hz")
+    outer_loop_hz: int = Field(48, gt=0, description="velocity/position loop rate, Hz; must divide sim.physics_hz "
+                                                     "and be the same for every UAV (one fleet)")
     sensors: list[SensorSpec] = Field(default_factory=list)
     autonomy: AutonomySpec = Field(default_factory=AutonomySpec)
 
@@ -503,7 +680,8 @@ class CommsSection(Strict):
                                                               "perfect comms it shapes the graph of the team fusions "
                                                               "(hcmci, sets)")
     latency_s: NonNegFloat | None = Field(None, description="per hop, s; a whole number of physics ticks")
-    base_station: Vec3 | None = Field(None, description="position of the base station (the radio node 'base'), m")
+    base_station: Point3 | None = Field(None, description="position of the base station (the radio node 'base'), "
+                                                          "m, within 50 km of the origin")
     routing: Literal["mst", "chain"] = Field(
         "mst", description="routes to the base station: the minimum spanning tree of link weights −ln Pr at each step "
                            "(mst), or the fixed relay chain in the order of uavs (chain: uavs[k] relays through "
@@ -534,7 +712,7 @@ class DecoySpec(Strict):
     [12°, 36°] and tilts the axis by the aperture (``tilt_deg`` left out = twice the half-angle)."""
 
     id: str
-    position: Vec3 = Field(description="centre of the decoy's body, m")
+    position: Point3 = Field(description="centre of the decoy's body, m, within 50 km of the origin")
     yaw_deg: float = Field(0.0, description="azimuth of the visibility cone's axis, and heading of the body, deg")
     cone_half_angle_deg: float = Field(45.0, gt=0, le=180, description="half-angle of the visibility cone")
     tilt_deg: float | None = Field(None, ge=0, le=180, description="angle of the cone's axis from the vertical, deg "

@@ -33,7 +33,7 @@ from worlds.roads.mesh import road_polygons
 from worlds.roads.network import RoadNetwork, street_road_ids
 from worlds.roads.road import Road
 
-__all__ = ["TownConfig", "Town", "generate_town"]
+__all__ = ["TownConfig", "Town", "generate_town", "town_road_ids"]
 
 _CURVE_VIA = 12  # intermediate vertices per block of a curved arterial
 
@@ -192,6 +192,17 @@ def generate_town(cfg: TownConfig, rng: np.random.Generator) -> Town:
         boxes = boxes[np.sort(rng.choice(len(boxes), size=cfg.max_buildings, replace=False))]
     buildings = [Building.cuboid((cx, cy), (sx, sy, h), name=f"b{k}") for k, (cx, cy, sx, sy, h) in enumerate(boxes)]
     return Town(network=network, buildings=buildings)
+
+
+def town_road_ids(cfg: TownConfig) -> list[str]:
+    """Ids of every road :func:`generate_town` builds from ``cfg`` (they depend on the grid only, not on the random
+    draws), so that a world's routes can be checked at load: ``h{i}_{j}`` and ``v{i}_{j}`` streets, each a ``.f`` and
+    ``.r`` road."""
+    nx = int(cfg.extent[0] // cfg.block_size) + 1
+    ny = int(cfg.extent[1] // cfg.block_size) + 1
+    sids = [f"h{i}_{j}" for j in range(ny) for i in range(nx - 1)] + [f"v{i}_{j}" for i in range(nx)
+                                                                      for j in range(ny - 1)]
+    return [rid for sid in sids for rid in street_road_ids(sid)]
 
 
 def _nid(i: int, j: int) -> str:

@@ -151,7 +151,7 @@ def test_fleet_state_and_validation(client, dynamics):
     with pytest.raises(ValueError, match="spawn"):
         CarFleet(client, [SEDAN, SEDAN], [cfg, cfg], [Route(roads=("curvy.f",)), Route(roads=("curvy.f",))], net,
                  240, np.random.default_rng(0), dynamics=dynamics)
-    with pytest.raises(ValueError, match="rate_hz 50 Hz does not divide"):
+    with pytest.raises(ValueError, match="DriverConfig.rate_hz = 50 Hz does not divide physics_hz = 240 Hz"):
         CarFleet(client, [SEDAN], [DriverConfig(rate_hz=50)], [Route(roads=("curvy.f",))], net, 240,
                  np.random.default_rng(0), dynamics=dynamics[:1])
     with pytest.raises(ValueError, match="one params, driver config, route and dynamics per car"):

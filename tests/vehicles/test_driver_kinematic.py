@@ -186,7 +186,7 @@ def test_random_walk_on_a_grid_stays_on_roads_and_is_reproducible():
     ("random_walk_chunk", 0), ("cruise_change_period", -1.0),
 ])
 def test_invalid_driver_config_names_the_field(field, value):
-    with pytest.raises(ValueError, match=rf"DriverConfig\.{field}"):
+    with pytest.raises(ValueError, match=rf"(?s)validation error for DriverConfig\n.*\b{field}\b"):
         DriverConfig(**{field: value})
 
 

@@ -145,8 +145,8 @@ def test_outer_loop_rates_that_divide_physics_rate(bullet_client, rng, run_fleet
     assert np.linalg.norm(log["p"][-1] - [1.0, 0.0, 2.0]) < 0.02
 
 
-@pytest.mark.parametrize(("outer_hz", "match"), [(50, "outer_loop_hz=50 Hz does not divide physics_hz=240"),
-                                                 (7, "outer_loop_hz=7"), (480, "outer_loop_hz=480")])
+@pytest.mark.parametrize(("outer_hz", "match"), [(50, "outer_loop_hz = 50 Hz does not divide physics_hz = 240 Hz"),
+                                                 (7, "outer_loop_hz = 7 Hz"), (480, "outer_loop_hz = 480 Hz")])
 def test_rate_not_dividing_physics_rate_rejected(bullet_client, rng, outer_hz, match) -> None:
     with pytest.raises(ValueError, match=match):
         make_fleet(bullet_client, "crazyflie", [0, 0, 2], rng, options=FleetOptions(outer_loop_hz=outer_hz))

@@ -45,17 +45,9 @@ from vehicles.quadrotor.stack import AirframeStack
 from vehicles.quadrotor.state import FleetState
 from vehicles.quadrotor.wind import DrydenWind, WindConfig
 from vehicles.quadrotor.wrench import total_wrench_W
+from worlds.rates import divisor
 
-__all__ = ["FleetOptions", "QuadrotorFleet", "check_rate"]
-
-
-def check_rate(name: str, rate_hz: object, physics_hz: int) -> int:
-    """Return ``physics_hz // rate_hz`` (ticks per period) or raise naming ``name`` if it is not an integer divisor."""
-    if not isinstance(rate_hz, (int, np.integer)) or isinstance(rate_hz, bool) or rate_hz <= 0:
-        raise ValueError(f"{name} must be a positive integer (Hz), got {rate_hz!r}")
-    if physics_hz % rate_hz != 0:
-        raise ValueError(f"{name}={rate_hz} Hz does not divide physics_hz={physics_hz} Hz")
-    return physics_hz // int(rate_hz)
+__all__ = ["FleetOptions", "QuadrotorFleet"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -167,7 +159,7 @@ class QuadrotorFleet:
                  physics_hz: int, options: FleetOptions, rng: np.random.Generator) -> None:
         if not isinstance(physics_hz, (int, np.integer)) or isinstance(physics_hz, bool) or physics_hz <= 0:
             raise ValueError(f"physics_hz must be a positive integer (Hz), got {physics_hz!r}")
-        self._outer_div = check_rate("FleetOptions.outer_loop_hz", options.outer_loop_hz, int(physics_hz))
+        self._outer_div = divisor(options.outer_loop_hz, int(physics_hz), "FleetOptions.outer_loop_hz")
         n = len(airframes)
         p0_W = np.asarray(p0_W, dtype=float)
         yaw0 = np.asarray(yaw0, dtype=float)

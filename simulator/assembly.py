@@ -26,7 +26,7 @@ from autonomy.sensing.messages import EstimateMessage, StateMessage
 from autonomy.sensing.scene import SensorPose, TargetTruth
 from simulator.clock import Clock
 from simulator.decoys import StaticDecoys, build_decoys
-from simulator.factories import build_estimator, build_guidance, build_sensor
+from simulator.registry import build_estimator, build_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery

@@ -159,13 +159,14 @@ def build_search(ctx: GuidanceContext) -> Any:
     reach = np.sqrt(2.0) * (g.altitude - sensor.ground_z) * np.tan(sensor.opening_angle / 2)
     planner = SearchPlanner(config, PrismViewRegion(sensor, ctx.buildings), estimator.estimator.free_area,
                             ctx.buildings, footprint_radius=float(reach))
-    return SetMembershipSearchGuidance(planner, estimator.estimator, lag_s=spec.velocity_lag_s,
+    return SetMembershipSearchGuidance(planner, estimator.estimator, velocity_lag_s=spec.velocity_lag_s,
                                        max_speed=load_airframe(uav.airframe).max_speed)
 
 
 def build_infoplan(ctx: GuidanceContext) -> Any:
     """Paper 001's information planner as UAV ``index``'s guidance (:class:`InfoPlanSpec`; the radar, base station
-    and radio are the world's: ``worlds.checks`` makes sure they exist)."""
+    and radio are the world's: ``worlds.checks`` makes sure they exist). The block's ``heading_rates`` (a count) is
+    the config's ``n_heading_rates``: the config's ``heading_rates`` is the grid itself."""
     from autonomy.guidance.infoplan.config import InfoPlannerConfig
     from autonomy.guidance.infoplan.guidance import InfoPlannerGuidance
 

@@ -175,7 +175,9 @@ def split_params(params: dict[str, Any], model: type[BaseModel], others: list[ty
     foreign = set().union(*(set(m.model_fields) for m in others if m is not model)) if others else set()
     dropped = sorted(k for k in params if k not in own and k in foreign)
     if dropped:
-        warnings.warn(f"{where}: ignoring {', '.join(dropped)} (settings of another type)", WorldNote, stacklevel=2)
+        # shown as "world:0: WorldNote: ..." (no source line: the note is about the world file, not this code)
+        warnings.warn_explicit(f"{where}: ignoring {', '.join(dropped)} (settings of another type)", WorldNote,
+                               filename="world", lineno=0, module="worlds.variants")
     return {k: v for k, v in params.items() if k not in dropped}
 
 

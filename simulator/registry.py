@@ -65,10 +65,10 @@ GUIDANCE_BUILDERS: dict[str, GuidanceBuilder] = {
 """Guidance builders by ``autonomy.guidance.type`` (the tags of :data:`worlds.variants.GUIDANCES`)."""
 
 
-def register_guidance(tag: str, settings: type[BaseModel], builder: GuidanceBuilder, block: str | None = None) -> None:
+def register_guidance(tag: str, settings: type[BaseModel], builder: GuidanceBuilder) -> None:
     """Add a guidance type: the world schema accepts ``type: tag`` with ``params`` checked against ``settings``
     at load, and :func:`build_guidance` builds it with ``builder``."""
-    variants.register_guidance(tag, variants.GuidanceVariant(settings=settings, block=block))
+    variants.register_guidance(tag, variants.GuidanceVariant(settings=settings))
     GUIDANCE_BUILDERS[tag] = builder
 
 

@@ -33,10 +33,12 @@ __all__ = [
     "FusionVariant",
     "GuidanceVariant",
     "WorldNote",
+    "check_tag",
     "known_tags",
     "register_estimator",
     "register_fusion",
     "register_guidance",
+    "settings_models",
     "split_params",
 ]
 
@@ -55,13 +57,10 @@ class EstimatorVariant:
         Model of its ``params`` (None: unchecked keyword arguments of a plugin class).
     road : type[BaseModel] | None
         Model of its ``road`` settings (None: it takes none).
-    block : str | None
-        Name of its own settings block on the estimator section (``imm``, ``set_membership``), if any.
     """
 
     settings: type[BaseModel] | None
     road: type[BaseModel] | None = None
-    block: str | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,12 +71,9 @@ class GuidanceVariant:
     ----------
     settings : type[BaseModel] | None
         Model of its ``params`` (None: unchecked keyword arguments of a plugin class).
-    block : str | None
-        Name of its own settings block on the guidance section (``formation``, ``search``, ``infoplan``), if any.
     """
 
     settings: type[BaseModel] | None
-    block: str | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -99,10 +95,10 @@ ESTIMATORS: dict[str, EstimatorVariant] = {
     "ukf": _TRACKER,
     "ckf": _TRACKER,
     "scif": _TRACKER,
-    "imm": EstimatorVariant(settings=TrackerSettings, block="imm"),
+    "imm": _TRACKER,
     "maekf": EstimatorVariant(settings=TrackerSettings, road=RoadSettings),
     "ecukf": EstimatorVariant(settings=TrackerSettings, road=RoadSettings),
-    "set_membership": EstimatorVariant(settings=SetMembershipSettings, block="set_membership"),
+    "set_membership": EstimatorVariant(settings=SetMembershipSettings),
     "plugin": EstimatorVariant(settings=None),
 }
 """Estimator types by tag."""
@@ -113,9 +109,9 @@ GUIDANCES: dict[str, GuidanceVariant] = {
     "vector_field": GuidanceVariant(settings=VectorFieldSettings),
     "nmpc": GuidanceVariant(settings=NmpcSettings),
     "fast_mpc": GuidanceVariant(settings=FastMpcSettings),
-    "formation": GuidanceVariant(settings=FormationSettings, block="formation"),
-    "search": GuidanceVariant(settings=SearchSettings, block="search"),
-    "infoplan": GuidanceVariant(settings=InfoPlanSettings, block="infoplan"),
+    "formation": GuidanceVariant(settings=FormationSettings),
+    "search": GuidanceVariant(settings=SearchSettings),
+    "infoplan": GuidanceVariant(settings=InfoPlanSettings),
     "plugin": GuidanceVariant(settings=None),
 }
 """Guidance types by tag."""

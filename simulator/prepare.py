@@ -25,7 +25,7 @@ from autonomy.team.set_fusion import SetFusionTeam
 from simulator.clock import Clock
 from simulator.comms import Comms
 from simulator.decoys import StaticDecoys, build_decoys
-from simulator.factories import build_estimator, build_guidance, build_sensor
+from simulator.registry import build_estimator, build_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.recording import PybulletContacts, Recording
 from simulator.scene import Scene, SceneConfig

@@ -10,9 +10,13 @@ the physics rate, references between sections, UAVs starting inside the terrain)
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_validator
+
+from worlds.schema_autonomy import (AutonomySpec, EstimatorSpec, FormationSpec, FusionSpec, GuidanceSpec, ImmSpec,
+                                    InfoPlanSpec, JacobiGainsSpec, SearchSpec, SetMembershipSpec)
+from worlds.schema_base import NonNegFloat, PositiveFloat, Strict, Vec2, Vec3
 
 from worlds.catalog import CAR_TYPES
 
@@ -29,6 +33,7 @@ __all__ = [
     "EstimatorSpec",
     "FormationSpec",
     "FovSpec",
+    "FusionSpec",
     "GroundVehicleSpec",
     "GuidanceSpec",
     "ImmSpec",
@@ -54,11 +59,6 @@ __all__ = [
     "World",
 ]
 
-PositiveFloat = Annotated[float, Field(gt=0)]
-NonNegFloat = Annotated[float, Field(ge=0)]
-Vec2 = tuple[float, float]
-Vec3 = tuple[float, float, float]
-
 WORLD_HALF_EXTENT = 50_000.0
 """m: every place of a world (road nodes, buildings, decoys, UAV starts, the base station) lies within this distance
 of the origin along each axis, half the largest terrain; the road network is sampled along its length, so a node
@@ -67,12 +67,6 @@ at 1e9 m would ask for a billion samples."""
 Coordinate = Annotated[float, Field(ge=-WORLD_HALF_EXTENT, le=WORLD_HALF_EXTENT)]
 Point2 = tuple[Coordinate, Coordinate]
 Point3 = tuple[Coordinate, Coordinate, Coordinate]
-
-
-class Strict(BaseModel):
-    """Base for every section: unknown keys are errors; numbers are finite; values are checked on assignment too."""
-
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)
 
 
 MIN_PHYSICS_HZ = 100
@@ -428,222 +422,6 @@ class BoxSpec(SensorBase):
 
 
 SensorSpec = Annotated[RadarSpec | CameraSpec | BearingSpec | BoxSpec, Field(discriminator="type")]
-
-
-def _check_plugin(kind: str, plugin: str | None) -> None:
-    if (kind == "plugin") != (plugin is not None):
-        raise ValueError("type 'plugin' and the 'plugin' import path go together")
-    if plugin is not None and ":" not in plugin:
-        raise ValueError(f"plugin must look like 'package.module:Class', got {plugin!r}")
-
-
-class ImmSpec(Strict):
-    """Paper 003's IMM (``autonomy.estimation.imm.cv_ct_imm``): EKFs on CV and on coordinated turns at ±ω; the CV
-    mode's white-acceleration density is the tracker's ``params.q``."""
-
-    turn_rate_deg_s: PositiveFloat = Field(17.1887, description="ω of the two turn modes, deg/s (0.3 rad/s)")
-    q_turn: PositiveFloat = Field(0.05, description="white-acceleration density of the turn modes, m^2/s^3")
-    p_stay: float = Field(0.95, gt=0, lt=1, description="diagonal of the mode-transition matrix")
-
-
-class SetMembershipSpec(Strict):
-    """Paper 004's set-membership estimator (``autonomy.estimation.setmem``): the search area it keeps its sets in
-    (the area less the buildings' footprints is ``X_s``) and the targets' speed bound behind its guarantee; the
-    estimator's numerical settings (``quad_segs``, ``simplify_tol``, ``max_vertices``, ``max_hole_area``) go in the
-    estimator's ``params``."""
-
-    area: tuple[float, float, float, float] = Field(description="search area x_min, y_min, x_max, y_max, m")
-    max_target_speed: PositiveFloat = Field(5.0 / 3.6, description="bound on every target's ground speed, m/s "
-                                                                   "(the paper's 5 km/h)")
-
-    @model_validator(mode="after")
-    def _box(self) -> SetMembershipSpec:
-        x0, y0, x1, y1 = self.area
-        if not (x1 > x0 and y1 > y0):
-            raise ValueError(f"area must be [x_min, y_min, x_max, y_max] with max > min, got {list(self.area)}")
-        return self
-
-
-class EstimatorSpec(Strict):
-    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or paper
-    003's ``imm`` (CV + CT ±ω EKFs; model ``cv``), a road-constrained tracker (paper 002: ``maekf``
-    pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on the world's road map, with junction hypotheses and
-    an unconstrained fallback off the map), paper 004's ``set_membership`` estimator (sets that hold every target,
-    from a bounded-error ``box`` sensor; settings in ``set_membership``), or a user plugin."""
-
-    type: Literal["ekf", "ukf", "ckf", "scif", "imm", "maekf", "ecukf", "set_membership", "plugin"] = "ekf"
-    model: Literal["cv", "singer"] = "cv"
-    plugin: str | None = Field(None, description="'package.module:Class' of a user estimator (type: plugin)")
-    params: dict[str, Any] = Field(default_factory=dict,
-                                   description="TrackerConfig fields, or keyword arguments of a plugin class")
-    road: dict[str, Any] = Field(default_factory=dict,
-                                 description="maekf/ecukf: RoadFilterConfig fields (autonomy.estimation.road.config)")
-    imm: ImmSpec | None = Field(None, description="imm: the mode set's settings (None: the defaults)")
-    set_membership: SetMembershipSpec | None = Field(None, description="set_membership: the search area and the "
-                                                                       "targets' speed bound")
-
-    @model_validator(mode="after")
-    def _plugin(self) -> EstimatorSpec:
-        _check_plugin(self.type, self.plugin)
-        return self
-
-
-class JacobiGainsSpec(Strict):
-    """PD gains of the formation law in Jacobi coordinates (``autonomy.guidance.formation.jacobi.JacobiGains``)."""
-
-    kp_shape: PositiveFloat = Field(0.25, description="shape stiffness, 1/s^2")
-    kd_shape: PositiveFloat = Field(1.0, description="shape damping, 1/s")
-    kp_center: PositiveFloat = Field(0.25, description="centroid stiffness, 1/s^2")
-    kd_center: PositiveFloat = Field(1.0, description="centroid damping, 1/s")
-
-
-class FormationSpec(Strict):
-    """Paper 003's FIM-optimal formation (``autonomy.guidance.formation.guidance.FormationConfig``); the team is every
-    UAV of the world (agent i = uavs[i]), the speed limit is the guidance ``speed`` and the altitude its ``altitude``;
-    the guidance step is the agent's period."""
-
-    sigma_bearing_deg: PositiveFloat | None = Field(
-        None, description="bearing noise σ behind det F, deg (None: the UAV's bearing sensor's sigma_azimuth_deg)")
-    ranges: list[PositiveFloat] | None = Field(None, description="desired range of each UAV to the target, m (None: "
-                                                                 "each keeps its current range, as Algorithm 1)")
-    gains: JacobiGainsSpec = Field(default_factory=JacobiGainsSpec)
-    backward_weight: NonNegFloat = Field(10.0, description="penalty on moves against the target's travel")
-    n_rotations: int = Field(72, ge=4, description="coarse grid of the free rotation search")
-    altitude_gain: NonNegFloat = Field(1.0, description="k_z of the altitude hold, 1/s")
-    geometry: Literal["optimal", "trail"] = Field("optimal", description="Algorithm 1, or the trailing-fan baseline")
-    trail_fan_deg: float = Field(15.0, gt=0, le=90, description="half-angle of the trailing fan, deg")
-
-
-class SearchSpec(Strict):
-    """Paper 004's sequential one-step search MPC (``autonomy.guidance.search.planner.SearchConfig``): constant speed
-    and altitude (the guidance ``speed`` and ``altitude``), one heading change per agent step (the step ``T`` is the
-    agent's period), chosen on a grid to shrink the predicted sets; the search area and the targets' speed bound are
-    the UAV's ``set_membership`` estimator's."""
-
-    max_turn_deg: float = Field(45.0, gt=0, le=180, description="bound on the heading change per step, deg")
-    n_controls: int = Field(7, ge=3, description="grid of heading changes, odd")
-    horizon: int = Field(2, ge=1, description="steps the held heading change is rolled out over")
-    alpha_m: NonNegFloat = Field(1.3, description="weight of the undetected set's area")
-    alpha_d: NonNegFloat = Field(4.5, description="weight of the pull towards the nearest large set")
-    alpha_s: NonNegFloat = Field(3500.0, description="weight of the obstacle risk")
-    alpha_s1: float = Field(10.0, description="centre of the obstacle-risk transition, m")
-    alpha_s2: PositiveFloat = Field(3.0, description="width of the obstacle-risk transition, m")
-    d_col: NonNegFloat = Field(5.0, description="distance to an obstacle counted as a collision, m")
-    loiter_safety: bool = Field(True, description="admit only turns after which a maximum-turn loiter stays clear "
-                                                  "of the obstacles (beyond the paper)")
-    clearance_margin: NonNegFloat = Field(1.0, description="margin over d_col the safe loiters keep, m: must cover "
-                                                           "the quadrotor's deviation from the planned chords")
-    tail_steps: int = Field(0, ge=0, description="steps the leftover sets grow before they are measured (0: paper)")
-    altitude_gain: NonNegFloat = Field(1.0, description="vertical speed per metre of altitude error, 1/s")
-    velocity_lag_s: NonNegFloat = Field(0.0, description="time constant of the UAV's velocity response, s, that the "
-                                                         "set-points compensate so that the UAV ends each step where "
-                                                         "the planner's chord does (0: none)")
-
-    @field_validator("n_controls")
-    @classmethod
-    def _odd(cls, value: int) -> int:
-        if value % 2 == 0:
-            raise ValueError(f"an odd number (so that 0 is on the grid), got {value}")
-        return value
-
-
-class InfoPlanSpec(Strict):
-    """Paper 001's communication-aware information planner (``autonomy.guidance.infoplan``): every UAV of the world
-    flies it with the same settings and plans the whole team (UAV i = uavs[i]); the speed is the guidance ``speed``,
-    the altitude its ``altitude``, the step T_s the agent's period, the radar noise (δr, δθ) the UAV's radar's, the base
-    station ``comms.base_station`` and the link model the radio's (``comms``). Defaults: the paper's."""
-
-    routing: Literal["mst", "chain", "none"] | None = Field(
-        None, description="route model of the objective: the radio's minimum spanning tree (mst) or fixed relay chain "
-                          "(chain), or none (β ≡ 1: no communication term, the paper's 'without communication "
-                          "optimisation'); None: the radio's comms.routing")
-    objective: Literal["team", "own"] = Field("team", description="each UAV maximises the team's delivered "
-                                                                  "information (team) or only its own (own, eq. 42)")
-    criterion: Literal["logdet", "trace"] = Field("logdet", description="log det of the base's predicted information "
-                                                                        "(D-optimal) or Σ β tr I (eq. 41)")
-    horizon: int = Field(3, ge=1, description="steps T_p in the horizon")
-    heading_rates: int = Field(7, ge=3, description="size of the heading-rate grid over ±max_heading_rate (odd)")
-    max_heading_rate_deg_s: PositiveFloat = Field(30.0, description="ω_max, deg/s")
-    d_safe: NonNegFloat = Field(100.0, description="planned separation between UAVs, m")
-    target_accel_std: PositiveFloat = Field(0.1, description="target process noise δx = δy of the prediction, m/s^2")
-    search: Literal["sequential", "joint"] = Field("sequential", description="UAVs in hierarchy order (coordinate "
-                                                                             "ascent), or all jointly")
-    sweeps: int = Field(2, ge=1, description="passes of the sequential search")
-
-    @field_validator("heading_rates")
-    @classmethod
-    def _odd(cls, value: int) -> int:
-        if value % 2 == 0:
-            raise ValueError("an odd number (so that straight flight is in the grid)")
-        return value
-
-
-class GuidanceSpec(Strict):
-    type: Literal["hold", "waypoints", "vector_field", "nmpc", "fast_mpc", "formation", "search", "infoplan",
-                  "plugin"] = "hold"
-    plugin: str | None = Field(None, description="'package.module:Class' of a user guidance law (type: plugin)")
-    standoff_m: PositiveFloat = Field(100.0, description="standoff radius around the target, m")
-    speed: PositiveFloat = Field(12.0, description="nominal speed, m/s")
-    altitude: PositiveFloat = Field(60.0, description="m")
-    waypoints: list[Vec3] = Field(default_factory=list, description="for type waypoints, m")
-    params: dict[str, Any] = Field(default_factory=dict,
-                                   description="further fields of the law's config, or keyword arguments of a plugin")
-    formation: FormationSpec | None = Field(None, description="type formation: its settings (None: the defaults)")
-    search: SearchSpec | None = Field(None, description="type search: its settings (None: the defaults)")
-    infoplan: InfoPlanSpec | None = Field(None, description="type infoplan: its settings (None: the defaults)")
-
-    @model_validator(mode="after")
-    def _plugin(self) -> GuidanceSpec:
-        _check_plugin(self.type, self.plugin)
-        if self.type == "waypoints" and not self.waypoints:
-            raise ValueError("type 'waypoints' needs a non-empty 'waypoints' list")
-        return self
-
-
-class FusionSpec(Strict):
-    """Fusion across the team: track-to-track fusion of the teammates' shared estimates (``convex``,
-    ``covariance_intersection``: ``autonomy.fusion.track_fusion``), HCMCI consensus on information (``hcmci``:
-    ``autonomy.fusion.hcmci_team``; needs the ``scif`` estimator; the UAVs due at a tick fuse as a team over the radio
-    links that are up), raw measurement sharing (``measurements``: ``autonomy.fusion.measurement_sharing``; every
-    teammate's detections reach this UAV over the radio, and its tracker stacks them with its own per scan time:
-    paper 003's centralised augmented measurement), set fusion (``sets``: ``autonomy.fusion.set_team``; needs the
-    ``set_membership`` estimator; the UAVs due at a tick fuse their sets with the teammates their links reach, paper
-    004's fusion over lines of sight with ``comms.block_by_buildings``), or fusion at the base station
-    (``base_station``: ``autonomy.fusion.base_station``; needs the ``scif`` estimator, ``comms.base_station`` and a
-    radio model: the UAV runs a local information filter and sends the information of each scan to the base along its
-    route of ``comms.routing``; the base fuses the packets that arrive — paper 001)."""
-
-    method: Literal["none", "convex", "covariance_intersection", "hcmci", "measurements", "sets",
-                    "base_station"] = "none"
-    max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
-    q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
-    rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")
-    b: float | Literal["safe"] = Field("safe", description="hcmci: gain on the averaged measurement information, "
-                                                           "'safe' (no measurement counted twice) or a number > 0 "
-                                                           "(e.g. the team size N)")
-
-    @field_validator("b", mode="before")
-    @classmethod
-    def _gain(cls, value: Any) -> Any:
-        if value == "safe" or (isinstance(value, int | float) and not isinstance(value, bool) and value > 0
-                               and value != float("inf")):
-            return value
-        raise ValueError("'safe' or a finite number > 0")
-
-    @model_validator(mode="after")
-    def _hcmci_keys(self) -> FusionSpec:
-        # a resolved world (model_dump) carries both at their defaults: only other values are errors
-        extra = [k for k in ("b", "rounds") if getattr(self, k) != type(self).model_fields[k].default]
-        if extra and self.method != "hcmci":
-            raise ValueError(f"{' and '.join(extra)} only with method hcmci (method is {self.method!r})")
-        return self
-
-
-class AutonomySpec(Strict):
-    rate_hz: PositiveFloat = Field(10.0, description="agent decision rate, Hz; must divide sim.physics_hz")
-    fusion: FusionSpec = Field(default_factory=FusionSpec)
-    estimator: EstimatorSpec = Field(default_factory=EstimatorSpec)
-    guidance: GuidanceSpec = Field(default_factory=GuidanceSpec)
 
 
 class UavSpec(Strict):

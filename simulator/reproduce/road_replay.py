@@ -145,7 +145,7 @@ def _paper_estimator(network: Any) -> Callable[[str, int, dict], Any]:
     from autonomy.estimation.road.config import RoadFilterConfig
     from autonomy.estimation.road.tracker import RoadConstrainedTracker, RoadTrackerConfig
     from autonomy.estimation.tracker import SingleTargetTracker
-    from simulator.factories import ROAD_FALLBACK_FILTER
+    from simulator.builders.estimators import ROAD_FALLBACK_FILTER
 
     def make(kind: str, index: int, params: dict) -> Any:
         base = replace(RoadTrackerConfig().tracker, **params)
@@ -259,7 +259,7 @@ def recorded_case(run_dir: str | Path) -> ReplayCase:
     """The detections of a recorded run, handed to each UAV at the agent step they reached it in the run."""
     from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
     from autonomy.sensing.measurement import Detection
-    from simulator.factories import build_estimator, build_sensor
+    from simulator.registry import build_estimator, build_sensor
     from simulator.runrecord import load_stream
 
     run_dir = Path(run_dir)

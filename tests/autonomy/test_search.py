@@ -162,12 +162,12 @@ def test_lag_compensated_setpoint_ends_the_step_on_the_chord(u_deg):
         return np.trapezoid(v, t, axis=0), v_c
 
     chord = CFG.speed * T * np.array([np.cos(np.pi / 2 + np.radians(u_deg)), np.sin(np.pi / 2 + np.radians(u_deg))])
-    moved, v_c = step(SetMembershipSearchGuidance(planner(), est, lag_s=tau))
+    moved, v_c = step(SetMembershipSearchGuidance(planner(), est, velocity_lag_s=tau))
     np.testing.assert_allclose(moved, chord, atol=1e-5)
     assert np.hypot(*v_c) >= CFG.speed - 1e-9
     plain, _ = step(SetMembershipSearchGuidance(planner(), est))
     assert np.hypot(*(plain - chord)) > (0.0 if u_deg == 0 else 0.5) - 1e-9
-    capped = SetMembershipSearchGuidance(planner(), est, lag_s=tau, max_speed=CFG.speed)
+    capped = SetMembershipSearchGuidance(planner(), est, velocity_lag_s=tau, max_speed=CFG.speed)
     assert np.hypot(*step(capped)[1]) <= CFG.speed + 1e-9
 
 

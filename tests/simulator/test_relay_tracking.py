@@ -8,7 +8,7 @@ from scipy import stats
 
 from autonomy.guidance.infoplan.information import radar_information
 from simulator.api import run
-from simulator.factories import build_guidance
+from simulator.registry import build_guidance
 from simulator.reproduce.paper_001_physics import direct_beta
 from worlds.loader import load_world
 

@@ -5,7 +5,7 @@ import pytest
 
 from autonomy.estimation.road.tracker import RoadConstrainedTracker
 from simulator.api import run
-from simulator.factories import build_estimator
+from simulator.registry import build_estimator
 from worlds.errors import WorldError
 from worlds.loader import load_world
 

@@ -45,7 +45,7 @@ def test_the_new_keys_load_with_their_defaults(tmp_path):
 def test_the_factories_build_what_the_keys_say(tmp_path):
     import math
 
-    from simulator.factories import build_estimator, build_guidance
+    from simulator.registry import build_estimator, build_guidance
 
     world = load_world(write(tmp_path, TEAM)).world
     trk = build_estimator(world.uavs[0], 0)

@@ -45,7 +45,7 @@ def test_the_new_keys_load_with_their_defaults(tmp_path):
 
 
 def test_the_factory_builds_the_planner_from_the_world(tmp_path):
-    from simulator.factories import build_guidance
+    from simulator.registry import build_guidance
 
     world = load_world(write(tmp_path, TEAM)).world
     law = build_guidance(world.uavs[1], 1, 2, (), world.comms)

@@ -13,11 +13,12 @@ The planner's safe-loiter constraint (:mod:`~autonomy.guidance.search.safety`) i
 position and course; its by-construction clearance holds for the discrete model (straight chords of ``V T``, exact
 turns), so a physical UAV keeps it only up to its tracking error, which ``SearchConfig.clearance_margin`` must cover.
 
-A vehicle whose horizontal velocity follows its set-point as a first-order lag of time constant ``tau`` (``lag_s``)
-does not turn at once: held for one step from the velocity ``v0``, the set-point ``v_c`` moves it by
-``v_c T + (v0 - v_c) tau (1 - exp(-T / tau))``. With ``lag_s > 0`` the set-point is chosen so that this displacement
-is the model's chord ``V T (cos(psi + u), sin(psi + u))``, and the UAV ends the step where the planner put it (to the
-first order: its speed limit and tilt saturation are not modelled); ``lag_s = 0`` commands the chord's velocity.
+A vehicle whose horizontal velocity follows its set-point as a first-order lag of time constant ``tau``
+(``velocity_lag_s``) does not turn at once: held for one step from the velocity ``v0``, the set-point ``v_c`` moves it
+by ``v_c T + (v0 - v_c) tau (1 - exp(-T / tau))``. With ``velocity_lag_s > 0`` the set-point is chosen so that this
+displacement is the model's chord ``V T (cos(psi + u), sin(psi + u))``, and the UAV ends the step where the planner
+put it (to the first order: its speed limit and tilt saturation are not modelled); ``velocity_lag_s = 0`` commands the
+chord's velocity.
 """
 
 from __future__ import annotations
@@ -57,23 +58,23 @@ class SetMembershipSearchGuidance(Guidance):
         The one-step MPC.
     estimator : SetMembershipEstimator
         This UAV's set-membership estimator (read only).
-    lag_s : float
+    velocity_lag_s : float
         Time constant ``tau`` (s, >= 0) of the vehicle's velocity response that the set-point compensates (module
         docstring); 0 for none.
     max_speed : float
         Largest horizontal set-point speed (m/s), > 0; the compensated set-point is scaled down to it.
     """
 
-    def __init__(self, planner: SearchPlanner, estimator: SetMembershipEstimator, lag_s: float = 0.0,
+    def __init__(self, planner: SearchPlanner, estimator: SetMembershipEstimator, velocity_lag_s: float = 0.0,
                  max_speed: float = np.inf):
         super().__init__()
-        if not (lag_s >= 0):
-            raise ValueError(f"SetMembershipSearchGuidance.lag_s must be >= 0 s, got {lag_s}")
+        if not (velocity_lag_s >= 0):
+            raise ValueError(f"SetMembershipSearchGuidance.velocity_lag_s must be >= 0 s, got {velocity_lag_s}")
         if not (max_speed > 0):
             raise ValueError(f"SetMembershipSearchGuidance.max_speed must be > 0 m/s, got {max_speed}")
         self.planner = planner
         self.estimator = estimator
-        self.lag_s = float(lag_s)
+        self.velocity_lag_s = float(velocity_lag_s)
         self.max_speed = float(max_speed)
         self.last_decision: SearchDecision | None = None
 
@@ -97,8 +98,8 @@ class SetMembershipSearchGuidance(Guidance):
         self.last_decision = decision
         psi = heading + decision.u
         v_xy = cfg.speed * np.array([np.cos(psi), np.sin(psi)])
-        if self.lag_s > 0:
-            k = self.lag_s * (1.0 - np.exp(-cfg.dt / self.lag_s))  # the step's lag, s
+        if self.velocity_lag_s > 0:
+            k = self.velocity_lag_s * (1.0 - np.exp(-cfg.dt / self.velocity_lag_s))  # the step's lag, s
             v_xy = (v_xy * cfg.dt - np.asarray(own.v_W[:2], float) * k) / (cfg.dt - k)
             norm = float(np.hypot(*v_xy))
             if norm > self.max_speed:

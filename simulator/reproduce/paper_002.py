@@ -210,19 +210,14 @@ def _run_time(reports: dict[str, dict[int, RunReport]], idx: list[int]) -> float
 
 def _col(runs: dict[int, dict], keys: tuple[str, ...], idx: list[int]) -> np.ndarray:
     """Per run (in ``idx`` order) the mean of the metrics ``keys`` (NaN where one is missing)."""
-    out = []
-    for i in idx:
-        vals = [runs[i].get(k) for k in keys]
-        out.append(np.nan if any(v is None for v in vals) else float(np.mean(vals)))
-    return np.array(out)
+    vals = [[runs[i].get(k) for k in keys] for i in idx]
+    return np.array([np.nan if None in v else float(np.mean(v)) for v in vals])
 
 
 def _target(runs: dict[int, dict]) -> str:
-    for m in runs.values():
-        for k in m:
-            if k.startswith("targets.") and k.endswith(".position_error_mean_m"):
-                return k.split(".")[1]
-    return "car1"
+    """The id of the target the runs' metrics name (``car1`` if none)."""
+    keys = (k for m in runs.values() for k in m if k.startswith("targets.") and k.endswith(".position_error_mean_m"))
+    return next((k.split(".")[1] for k in keys), "car1")
 
 
 def _paired(a: np.ndarray, b: np.ndarray) -> MeanCI:

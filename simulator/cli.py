@@ -20,6 +20,7 @@ __all__ = ["main"]
 
 
 def _run(args: argparse.Namespace) -> int:
+    import simulator.registry  # noqa: F401  (registers the components' own rules with the loader's checks)
     from worlds.loader import load_world
 
     loaded = load_world(args.world, args.set or [])  # WorldError is reported by main() before PyBullet starts

@@ -21,10 +21,12 @@ from simulator.builders.guidance import (GuidanceContext, build_fast_mpc, build_
                                          build_vector_field, build_waypoints)
 from simulator.builders.sensors import build_bearing, build_box, build_camera, build_radar
 from worlds import variants
-from worlds.schema import CommsSection, UavSpec
+from worlds.checks import register_component_check
+from worlds.errors import WorldIssue
+from worlds.schema import CommsSection, UavSpec, World
 
 __all__ = ["ESTIMATOR_BUILDERS", "GUIDANCE_BUILDERS", "SENSOR_BUILDERS", "build_estimator", "build_guidance",
-           "build_sensor", "register_estimator", "register_guidance"]
+           "build_sensor", "register_estimator", "register_guidance", "sensor_issues"]
 
 SensorBuilder = Callable[[Any, str, Any], Sensor]
 EstimatorBuilder = Callable[[EstimatorContext], Any]
@@ -76,6 +78,23 @@ def register_estimator(tag: str, settings: type[BaseModel], builder: EstimatorBu
     """Add an estimator type (``params`` checked against ``settings`` at load; built with ``builder``)."""
     variants.register_estimator(tag, variants.EstimatorVariant(settings=settings))
     ESTIMATOR_BUILDERS[tag] = builder
+
+
+def sensor_issues(world: World) -> list[WorldIssue]:
+    """Every sensor entry of ``world`` that its sensor model refuses (its config's cross-field rules with the model's
+    own defaults), as load-time issues: registered with :func:`worlds.checks.register_component_check`."""
+    issues = []
+    for i, u in enumerate(world.uavs):
+        for j, spec in enumerate(u.sensors):
+            try:
+                build_sensor(spec, spec.id or f"{u.id}/{spec.type}{j}")
+            except (ValueError, TypeError) as exc:
+                issues.append(WorldIssue(f"uavs[{i}].sensors[{j}]", spec.model_dump(exclude_none=True),
+                                         f"settings the {spec.type} model accepts ({exc})"))
+    return issues
+
+
+register_component_check(sensor_issues)
 
 
 def build_sensor(spec: Any, name: str, buildings: Any = ()) -> Sensor:

@@ -7,13 +7,14 @@ Every rate is judged by :func:`worlds.rates.rate_divisor`, the rule the clock an
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 
 from worlds.catalog import AIRFRAMES
 from worlds.errors import WorldIssue
 from worlds.rates import divisors_text, rate_divisor, whole_ticks
 from worlds.schema import InfoPlanSpec, World
 
-__all__ = ["check_world"]
+__all__ = ["check_world", "register_component_check"]
 
 MAX_START_ALTITUDE = 5000.0
 """m: highest start of a UAV; the airframes' rotor and drag data are sea-level figures."""
@@ -23,8 +24,28 @@ TRACKER_TARGET_HEIGHT = 0.0
 worlds are checked without building anything)."""
 
 
+ComponentCheck = Callable[[World], list[WorldIssue]]
+_COMPONENT_CHECKS: list[ComponentCheck] = []
+
+
+def register_component_check(check: ComponentCheck) -> None:
+    """Add a check that :func:`check_world` runs last: the rules of a component's own config that the schema cannot
+    state without importing it (a radar's ``pfa < pd_ref`` with the radar's defaults). The package that builds the
+    components registers it (``simulator.registry``), so the loader refuses what the build would refuse."""
+    if check not in _COMPONENT_CHECKS:
+        _COMPONENT_CHECKS.append(check)
+
+
 def check_world(world: World) -> list[WorldIssue]:
     """Return every cross-field problem of ``world`` (empty when it is consistent)."""
+    issues = _world_issues(world)
+    if not issues:  # the components' own rules only on a consistent world
+        for check in _COMPONENT_CHECKS:
+            issues.extend(check(world))
+    return issues
+
+
+def _world_issues(world: World) -> list[WorldIssue]:
     issues: list[WorldIssue] = []
     hz = world.sim.physics_hz
 

@@ -16,11 +16,11 @@ from autonomy.fusion.hcmci_team import HcmciConfig, HcmciTeam, pair_adjacency
 from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 from interfaces.setpoints import VelocitySetpoint
 from interfaces.state import OwnState, TargetEstimate
-from autonomy.sensing.measurement import Detection
 from autonomy.team.base_station import BaseStationTeam
 from autonomy.team.hcmci import HcmciConsensusTeam, is_information_tracker
 from autonomy.team.independent import IndependentTeam, MeasurementSharingTeam, TrackFusionTeam
 from autonomy.team.set_fusion import SetFusionTeam
+from tests.autonomy.test_hcmci_team import _radar
 
 CFG = TrackerConfig(filter="scif", model="singer", singer_alpha=0.6, singer_sigma_a=0.67)
 
@@ -88,14 +88,6 @@ def test_what_each_protocol_shares_is_declared():
     assert TrackFusionTeam([0]).shares_estimates and not IndependentTeam([0]).shares_estimates
     assert MeasurementSharingTeam([0]).takes_detections and not TrackFusionTeam([0]).takes_detections
     assert not SetFusionTeam({}, set()).point_estimates and IndependentTeam([0]).point_estimates
-
-
-def _radar(p_target, p_sensor, t, rng, sigma=(1.0, 0.05, 0.05)):
-    d = np.asarray(p_target, float) - np.asarray(p_sensor, float)
-    z = np.array([np.linalg.norm(d), np.arctan2(d[1], d[0]), np.arctan2(d[2], np.hypot(d[0], d[1]))])
-    z = z + rng.normal(size=3) * np.asarray(sigma)
-    return Detection(z=z, R=np.diag(np.square(sigma)), t_meas=t, t_arrival=t, sensor_id="radar",
-                     p_sensor_W=np.asarray(p_sensor, float), kind="radar")
 
 
 def test_the_hcmci_protocol_is_the_hcmci_team_step_over_the_links_of_the_context():

@@ -37,7 +37,7 @@ def test_lists_become_tuples():
 def test_the_road_constraint_settings_reach_the_filter():
     loaded = load_world("road_standoff", [f"{U0}.estimator.type=maekf",
                                           f"{U0}.estimator.road={{constraint: {{sigma_keep: 0.7}}}}"])
-    from simulator.assembly import build_geometry
+    from worlds.build import build_geometry
 
     geometry = build_geometry(loaded.world, loaded.path, np.random.default_rng(0))
     est = build_estimator(loaded.world.uavs[0], 0, geometry.network)

@@ -26,7 +26,7 @@ def test_road_standoff_runs_with_a_road_constrained_estimator(tmp_path, kind):
 def test_road_constrained_estimator_is_built_on_the_road_network():
     loaded = load_world("road_standoff", ["uavs[0].autonomy.estimator.type=ecukf",
                                           "uavs[0].autonomy.estimator.road={spawn_distance: 25}"])
-    from simulator.assembly import build_geometry
+    from worlds.build import build_geometry
 
     geometry = build_geometry(loaded.world, loaded.path, np.random.default_rng(0))
     est = build_estimator(loaded.world.uavs[0], 0, geometry.network)

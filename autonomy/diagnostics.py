@@ -8,20 +8,23 @@ checks with ``isinstance`` and reads nothing else, so a component that lacks one
 - :class:`KeepsSolverStats`: a guidance law's solver counters and solve times (``metrics.json``);
 - :class:`HoldsRoad`: the road a road-constrained estimator holds the target on (the ``estimates`` stream's ``road``);
 - :class:`CountsSensorUse`: the detections that updated an estimator's track, per sensor id (``measurement_sharing``);
-- :class:`DecidesSearch`: the last decision of a set-membership search law (the ``search`` stream).
+- :class:`DecidesSearch`: the last decision of a set-membership search law (the ``search`` stream);
+- :class:`HoldsTracks`: the tracks of a multi-target estimator and which one is the target (the ``tracks`` stream,
+  the identity metrics, the team's track association).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 if TYPE_CHECKING:
     from autonomy.guidance.search.planner import SearchDecision
+    from interfaces.state import TrackReport
 
-__all__ = ["CountsSensorUse", "DecidesSearch", "HoldsRoad", "KeepsSolverStats", "PlansPath", "SolverSummary"]
+__all__ = ["CountsSensorUse", "DecidesSearch", "HoldsRoad", "HoldsTracks", "KeepsSolverStats", "PlansPath", "SolverSummary"]
 
 
 @runtime_checkable
@@ -74,3 +77,18 @@ class DecidesSearch(Protocol):
     """A set-membership search law: its last decision (None before the first)."""
 
     last_decision: SearchDecision | None
+
+
+@runtime_checkable
+class HoldsTracks(Protocol):
+    """A multi-target estimator: its tracks after its last step, and which of them it takes for the target."""
+
+    def track_reports(self) -> Sequence[TrackReport]:
+        """Every live track (tentative ones too, with ``confirmed`` False) after the last step, at that step's time."""
+        ...
+
+    @property
+    def target_track_id(self) -> int | None:
+        """Id of the track the estimator takes for the designated target (its estimate is the one ``step``
+        returned), or None when no track is believed to be the target."""
+        ...

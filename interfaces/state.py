@@ -13,7 +13,7 @@ import numpy as np
 
 from interfaces._checks import finite_number, finite_vector
 
-__all__ = ["OwnState", "TargetEstimate", "TeammateState"]
+__all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackReport"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -96,6 +96,42 @@ class TargetEstimate:
         """Constant-velocity prediction of the horizontal position, p(t) = p + v (t − t_est) (m); shape (..., 2)."""
         dt = np.asarray(t, dtype=float) - self.t
         return self.p_W[:2] + np.multiply.outer(dt, self.v_W[:2])
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackReport:
+    """One track of a UAV's multi-target tracker, as it is recorded and shared with the team.
+
+    Attributes
+    ----------
+    track_id : int
+        The tracker's id of the track (unique within one UAV's tracker for the whole run, >= 0).
+    estimate : TargetEstimate
+        The track's estimate (position, velocity, covariance).
+    target_probability : float
+        Probability that this track is the designated target, in [0, 1] (the tracker's identity belief).
+    evidence : float
+        Log-likelihood ratio ``log p(classes | target) − log p(classes | background car)`` of the class measurements
+        of the UAV's own sensors that updated this track (0 without any): what a teammate may add to its own belief
+        without counting anything twice.
+    confirmed : bool
+        Whether the track passed its confirmation logic (tentative tracks are recorded but not shared).
+    """
+
+    track_id: int
+    estimate: TargetEstimate
+    target_probability: float
+    evidence: float = 0.0
+    confirmed: bool = True
+
+    def __post_init__(self) -> None:
+        if int(self.track_id) != self.track_id or self.track_id < 0:
+            raise ValueError(f"TrackReport.track_id must be a non-negative integer, got {self.track_id}")
+        p = finite_number("TrackReport", "target_probability", self.target_probability)
+        if not 0.0 <= p <= 1.0:
+            raise ValueError(f"TrackReport.target_probability must be in [0, 1], got {p}")
+        object.__setattr__(self, "target_probability", p)
+        object.__setattr__(self, "evidence", finite_number("TrackReport", "evidence", self.evidence))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -63,6 +63,12 @@ _SCHEMAS = (
     StreamSchema(name="estimates", columns=_ESTIMATE, doc="per agent step: the UAV's own estimate (position m, "
                  "velocity m/s, covariance entries), the detections it used and the road it holds the target on"),
     StreamSchema(name="fused_estimates", columns=_ESTIMATE, doc="per agent step of a fusing UAV: the fused estimate"),
+    StreamSchema(name="tracks", doc="per agent step of a UAV with a multi-target tracker, per live track: its id, "
+                 "estimate (position m, velocity m/s, covariance entries), the probability that it is the designated "
+                 "target, its own class evidence (log-likelihood ratio), whether it is confirmed and whether the UAV "
+                 "takes it for the target",
+                 columns=("tick", "t", "uav", "track", "x", "y", "vx", "vy", "pxx", "pxy", "pyy", "p_target",
+                          "evidence", "confirmed", "is_target")),
     StreamSchema(name="commands", doc="per agent step: the set-point's kind and values (NaN where not that kind)",
                  columns=("tick", "t", "uav", "kind", "speed", "heading_rate", "altitude", "vx", "vy", "vz")),
     StreamSchema(name="measurement_sharing", doc="per agent step of a UAV taking its teammates' detections: those "

@@ -27,7 +27,7 @@ from autonomy.estimation.measurements import DetectionModel, attach_model
 
 from .scene import SceneQuery, SensorPose, TargetTruth
 
-__all__ = ["CLUTTER_ID", "Detection", "MeasurementKind", "Sensor", "SensorOutput", "azimuth_elevation", "wrap_angle"]
+__all__ = ["CLUTTER_ID", "ClassMeasurement", "Detection", "MeasurementKind", "Sensor", "SensorOutput", "azimuth_elevation", "wrap_angle"]
 
 MeasurementKind = Literal["radar", "bearing", "camera", "box"]
 CLUTTER_ID = -1
@@ -42,6 +42,44 @@ def azimuth_elevation(d_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Azimuth ``atan2(d_y, d_x)`` and elevation ``atan2(d_z, hypot(d_x, d_y))`` (rad) of vectors (N, 3)."""
     d = np.atleast_2d(d_W)
     return np.arctan2(d[:, 1], d[:, 0]), np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1]))
+
+
+@dataclass(frozen=True, kw_only=True)
+class ClassMeasurement:
+    """A sensor's reading of one class attribute of what it detected (a car's colour, body type, length class).
+
+    Attributes
+    ----------
+    attribute : str
+        Which attribute (``"colour"``, ``"body"``, ``"length"``): the keys of :attr:`TargetTruth.attributes`.
+    observed : int
+        The class the sensor reported, an index into the attribute's class list (``worlds.catalog``).
+    confusion : np.ndarray
+        (K, K) row-stochastic confusion matrix of the sensor: ``confusion[true, observed]`` is the probability of
+        reporting ``observed`` for a target of class ``true``. An estimator needs nothing else to update a class
+        belief by Bayes' rule.
+    """
+
+    attribute: str
+    observed: int
+    confusion: np.ndarray
+
+    def __post_init__(self) -> None:
+        C = np.array(self.confusion, dtype=float)
+        if C.ndim != 2 or C.shape[0] != C.shape[1] or C.shape[0] < 1:
+            raise ValueError(f"ClassMeasurement.confusion must be a square (K, K) array, got shape {C.shape}")
+        if np.any(C < 0) or not np.allclose(C.sum(axis=1), 1.0, atol=1e-9):
+            raise ValueError("ClassMeasurement.confusion must have non-negative rows that sum to 1")
+        if int(self.observed) != self.observed or not 0 <= self.observed < C.shape[0]:
+            raise ValueError(f"ClassMeasurement.observed must be a class index in [0, {C.shape[0]}), "
+                             f"got {self.observed!r}")
+        C.setflags(write=False)
+        object.__setattr__(self, "confusion", C)
+        object.__setattr__(self, "observed", int(self.observed))
+
+    def likelihood(self) -> np.ndarray:
+        """(K,) ``p(observed | true class k)`` for every class k: the column of the confusion matrix."""
+        return self.confusion[:, self.observed]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -73,6 +111,10 @@ class Detection:
         Camera only: (4,) ``[u_min, v_min, u_max, v_max]`` of the detected blob (px, continuous coordinates).
     bound : np.ndarray | None
         Box sensor only: (m,) half-widths of the bounded error, so the truth lies in ``[z - bound, z + bound]`` (m).
+    classes : tuple[ClassMeasurement, ...]
+        The sensor's class readings of the detected object (a camera's colour and body type, a radar's length class
+        from its range profile); empty for sensors that classify nothing and for false alarms' attributes drawn
+        from the background population.
     """
 
     z: np.ndarray
@@ -85,8 +127,10 @@ class Detection:
     kind: MeasurementKind | None = None
     pixel_box: np.ndarray | None = None
     bound: np.ndarray | None = None
+    classes: tuple[ClassMeasurement, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "classes", tuple(self.classes))
         z = np.array(self.z, dtype=float).reshape(-1)
         R = np.array(self.R, dtype=float)
         if R.shape != (z.size, z.size):

@@ -124,6 +124,9 @@ class TargetTruth:
         (M,) half aperture of each visibility cone (rad), required with ``cone_axis_W``.
     seg_ids : np.ndarray | None
         (M,) label of each target in rendered segmentation masks (the simulator's body ids), for truth association.
+    attributes : dict[str, np.ndarray] | None
+        Class attributes a sensor may read, by name (``"colour"``, ``"body"``, ``"length"``): (M,) class index of
+        each target (``worlds.catalog`` lists the classes; -1: the attribute does not apply, e.g. a static decoy).
     """
 
     ids: np.ndarray
@@ -134,6 +137,7 @@ class TargetTruth:
     cone_axis_W: np.ndarray | None = None
     cone_half_angle: np.ndarray | None = None
     seg_ids: np.ndarray | None = None
+    attributes: dict[str, np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         ids = np.array(self.ids, dtype=int).reshape(-1)
@@ -161,6 +165,15 @@ class TargetTruth:
             )
         if self.seg_ids is not None:
             object.__setattr__(self, "seg_ids", np.array(self.seg_ids, dtype=int).reshape(m))
+        if self.attributes is not None:
+            attrs = {}
+            for name, values in self.attributes.items():
+                a = np.array(values, dtype=int).reshape(-1)
+                if a.size != m:
+                    raise ValueError(f"TargetTruth.attributes[{name!r}] must have {m} entries, got {a.size}")
+                a.setflags(write=False)
+                attrs[str(name)] = a
+            object.__setattr__(self, "attributes", attrs)
 
     def __len__(self) -> int:
         return int(self.ids.size)

@@ -25,6 +25,9 @@ from autonomy.team.set_fusion import SetFusionTeam
 from simulator.clock import Clock
 from simulator.comms import Comms
 from simulator.decoys import StaticDecoys, build_decoys
+from autonomy.estimation.tracking.gated import TargetGatedEstimator
+from autonomy.estimation.tracking.multi import MultiTargetTracker
+from simulator.builders.multi_target import multi_target
 from simulator.registry import build_estimator, build_guidance, build_sensor
 from simulator.record import RunRecorder
 from simulator.recording import PybulletContacts, Recording
@@ -38,6 +41,7 @@ from simulator.truth import Truth
 from worlds.build import WorldGeometry, build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
+from worlds.schema import World
 
 if TYPE_CHECKING:
     from simulator.engine import RunOptions
@@ -84,6 +88,8 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOpti
         else:
             estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator", u.autonomy.estimator,
                                  lambda: build_estimator(u, i, geometry.network, geometry.buildings))
+        estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator.tracking", u.autonomy.estimator.tracking,
+                             lambda: multi_target(estimator, world, u))
         if options.guidance_factory is not None:
             guidance = options.guidance_factory(i, u)
         else:
@@ -146,6 +152,11 @@ def team_comms(teams: list[TeamProtocol], agents: list[AgentSlot], **parts: Any)
 def _check_information_tracker(loaded: LoadedWorld, i: int, estimator: TargetEstimator, method: str) -> None:
     """HCMCI and base-station fusion need the built-in tracker with the information filter (also when an estimator was
     passed in code)."""
+    if isinstance(estimator, MultiTargetTracker | TargetGatedEstimator):
+        raise WorldError(str(loaded.path), [WorldIssue(
+            f"uavs[{i}].autonomy.estimator.tracking.mode", "multi",
+            f"single: fusion method {method} fuses one track's information (a consensus over many tracks is not "
+            f"built); a world with traffic tracks every car by default")])
     if not is_information_tracker(estimator):
         raise WorldError(str(loaded.path), [WorldIssue(
             f"uavs[{i}].autonomy.estimator", type(estimator).__name__,
@@ -193,12 +204,13 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
 
     car_ids = [g.id for g in world.ground_vehicles]
     uav_ids = [u.id for u in world.uavs]
-    target_ids = world.targets or [g.id for g in world.ground_vehicles if g.role == "target"]
+    target_ids = world.target_ids()
     decoys = build_decoys(world.decoys, scene, CAR_RGBA)
     query = PybulletSceneQuery(scene.client, scene.occluders)
     outages = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     channel = build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query)
     truth = Truth(quads, cars, car_kinds, decoys)
+    _hand_off(world, prep.agents, cars, car_ids, seeds)
     teams = build_teams([u.autonomy.fusion.method for u in world.uavs], prep.agents, prep.hcmci)
     comms = team_comms(teams, prep.agents, uav_ids=uav_ids, quads=quads, channel=channel, comms=world.comms,
                        outages=outages, scene_query=query)
@@ -215,6 +227,20 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
                     target_index=car_ids.index(target_ids[0]) if target_ids else None,
                     sensors=prep.sensors, agents=prep.agents, buildings=geometry.buildings, network=geometry.network,
                     world_spec=world, outages=outages, record_div=clock.divisor(world.sim.record_hz, "sim.record_hz"))
+
+
+def _hand_off(world: World, agents: list[AgentSlot], cars: Any, car_ids: list[str], seeds: RunSeeds) -> None:
+    """The cue that designates the (first) target to the team: its true start position plus a normal error of the
+    target's ``cue.sigma_m`` per axis, one draw for the whole team, told to every estimator that takes a cue."""
+    takers = [a for a in agents if callable(getattr(a.agent.estimator, "cue", None))]
+    targets = world.designated()
+    if not takers or not targets or cars is None or targets[0].id not in car_ids:
+        return
+    sigma = targets[0].cue.sigma_m
+    p0 = np.asarray(cars.state.p_W[car_ids.index(targets[0].id)], dtype=float)[:2]
+    cued = p0 + seeds.generator("targets/cue").normal(0.0, sigma, 2)
+    for a in takers:
+        a.agent.estimator.cue(0.0, cued, sigma)
 
 
 def _search_record(team: SetFusionTeam, truth: Truth, recorder: RunRecorder, car_ids: list[str],

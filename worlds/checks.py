@@ -92,9 +92,9 @@ def _world_issues(world: World) -> list[WorldIssue]:
                 issues.append(WorldIssue(f"{section}[{ids.index(name)}].id", name, "ids unique within their section"))
 
     vehicle_ids = {g.id for g in world.ground_vehicles}
-    for k, tid in enumerate(world.targets or []):
-        if tid not in vehicle_ids:
-            issues.append(WorldIssue(f"targets[{k}]", tid,
+    for k, target in enumerate(world.targets or []):
+        if target.id not in vehicle_ids:
+            issues.append(WorldIssue(f"targets[{k}].id", target.id,
                                      f"the id of a ground vehicle ({sorted(vehicle_ids) or 'none defined'})"))
 
     has_roads = bool(world.roads.streets or world.roads.osm or world.roads.town)

@@ -497,6 +497,19 @@ class DecoySpec(Strict):
                                                                    "(None: twice the half-angle, the paper's cones)")
 
 
+class CueSpec(Strict):
+    """The hand-off that designates a target to the team: its position at the start, with this uncertainty."""
+
+    sigma_m: float = Field(20.0, gt=0, le=5000, description="standard deviation of the cued position per axis, m")
+
+
+class TargetSpec(Strict):
+    """A designated target (``targets: [car1]`` is short for ``targets: [{id: car1}]``)."""
+
+    id: str
+    cue: CueSpec = Field(default_factory=CueSpec, description="the team's hand-off of where the target starts")
+
+
 class World(Strict):
     """A whole world file."""
 
@@ -508,8 +521,27 @@ class World(Strict):
     roads: RoadsSection = Field(default_factory=RoadsSection)
     buildings: list[BuildingSpec] = Field(default_factory=list)
     ground_vehicles: list[GroundVehicleSpec] = Field(default_factory=list)
-    targets: list[str] | None = Field(None, description="ids of ground vehicles the team tracks (default: role target)")
+    targets: list[TargetSpec] | None = Field(None, description="the ground vehicles the team tracks, each an id or "
+                                             "{id, cue: {sigma_m}} (default: the vehicles of role target, cue "
+                                             "sigma 20 m)")
     decoys: list[DecoySpec] = Field(default_factory=list)
     uavs: list[UavSpec] = Field(default_factory=list)
     comms: CommsSection = Field(default_factory=CommsSection)
     render: RenderSection = Field(default_factory=RenderSection)
+
+    @field_validator("targets", mode="before")
+    @classmethod
+    def _target_ids(cls, value: object) -> object:
+        if isinstance(value, list):
+            return [{"id": v} if isinstance(v, str) else v for v in value]
+        return value
+
+    def designated(self) -> list[TargetSpec]:
+        """The designated targets: ``targets``, or every vehicle of role target with the default cue."""
+        if self.targets is not None:
+            return list(self.targets)
+        return [TargetSpec(id=g.id) for g in self.ground_vehicles if g.role == "target"]
+
+    def target_ids(self) -> list[str]:
+        """Ids of the designated targets (:meth:`designated`)."""
+        return [t.id for t in self.designated()]

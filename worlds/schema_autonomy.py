@@ -87,6 +87,37 @@ class SetMembershipSpec(Strict):
         return self
 
 
+class TrackingSpec(Strict):
+    """How many cars the UAV's tracker holds, and how it keeps the target among them
+    (``autonomy.estimation.tracking.multi.MultiTrackerConfig``, ``...tracking.identity.IdentityConfig``)."""
+
+    mode: Literal["auto", "single", "multi"] = Field(
+        "auto", description="single: one track, the target's (the papers' trackers); multi: a track per car in view "
+        "and a belief of which is the target; auto: multi when the world has more than one ground vehicle that is "
+        "not a decoy, single otherwise")
+    associator: Literal["gnn", "jpda"] = Field("gnn", description="global nearest neighbour or JPDA")
+    confirm_m: int = Field(3, ge=2, le=50, description="M of the M-of-N confirmation (the two starting fixes count)")
+    confirm_n: int = Field(4, ge=2, le=50, description="N of the M-of-N confirmation, >= confirm_m")
+    detection_probability: float = Field(0.9, gt=0, le=1, description="jpda: probability of detecting a car in view")
+    clutter_density: float = Field(1e-6, gt=0, le=1e3, description="jpda: false alarms per unit of measurement "
+                                                                   "space (e.g. per m*rad for a range-azimuth radar)")
+    merge_distance_m: float = Field(4.0, gt=0, le=100, description="two confirmed tracks this close (and "
+                                                                   "merge_speed_mps) are one car, m")
+    merge_speed_mps: float = Field(2.0, gt=0, le=50, description="velocity difference under which close tracks "
+                                                                 "merge, m/s")
+    max_tracks: int = Field(500, ge=1, le=100000, description="most live tracks")
+    min_target_probability: float = Field(0.5, gt=0, le=1, description="the most probable track is taken for the "
+                                                                       "target when its probability reaches this")
+    search_speed: float = Field(8.0, gt=0, le=100, description="growth of the region a lost (or cued) target is "
+                                                               "searched in, m/s per axis")
+
+    @model_validator(mode="after")
+    def _m_of_n(self) -> TrackingSpec:
+        if self.confirm_m > self.confirm_n:
+            raise ValueError(f"confirm_m <= confirm_n ({self.confirm_n}), got confirm_m {self.confirm_m}")
+        return self
+
+
 class EstimatorSpec(Strict):
     """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or paper
     003's ``imm`` (CV + CT ±ω EKFs; model ``cv``), a road-constrained tracker (paper 002: ``maekf``
@@ -106,6 +137,8 @@ class EstimatorSpec(Strict):
     imm: ImmSpec | None = Field(None, description="imm: the mode set's settings (None: the defaults)")
     set_membership: SetMembershipSpec | None = Field(None, description="set_membership: the search area and the "
                                                                        "targets' speed bound")
+    tracking: TrackingSpec = Field(default_factory=TrackingSpec, description="single- or multi-target tracking "
+                                   "(the trackers and plugins; set_membership holds every target as sets anyway)")
 
     @field_validator("type")
     @classmethod

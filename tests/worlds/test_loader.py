@@ -97,7 +97,7 @@ def test_duplicate_ids_and_dangling_target(tmp_path):
     text = GOOD + "  - id: u1\n    initial: {position: [5, 0, 30]}\ntargets: [car9]\n"
     err = error_of(write(tmp_path, text))
     paths = {i.path for i in err.issues}
-    assert "uavs[0].id" in paths and "targets[0]" in paths
+    assert "uavs[0].id" in paths and "targets[0].id" in paths
 
 
 def test_key_path_parsing():

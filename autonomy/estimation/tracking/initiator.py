@@ -20,7 +20,7 @@ from autonomy.estimation.measurements import MeasurementLike
 from .fixes import PositionFixer
 from .track import Track
 
-__all__ = ["FilterFactory", "FixConfirmingInitiator"]
+__all__ = ["FilterFactory", "FixConfirmingInitiator", "two_point_prior"]
 
 FilterFactory = Callable[[np.ndarray, np.ndarray, float], Filter]
 """Builds a new track's filter from ``(x0, P0, t0)`` (state, covariance, time in s)."""
@@ -107,20 +107,30 @@ class FixConfirmingInitiator:
 
     def _prior(self, xy: np.ndarray, Pxy: np.ndarray, v: np.ndarray, Pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """A new track's state and covariance from a confirmed fix (m, m²) and its two-point velocity (m/s, m²/s²)."""
-        if self.initial_speed_sigma is not None:  # fuse with the zero-mean speed prior N(0, σ² I)
-            P_prior = np.eye(2) * self.initial_speed_sigma**2
-            K = Pv @ np.linalg.inv(Pv + P_prior)
-            v = v - K @ v
-            Pv = Pv - K @ Pv
-            Pv = 0.5 * (Pv + Pv.T)
-        n = len(self.layout)
-        x0 = np.zeros(n)
-        P0 = np.zeros((n, n))
-        x0[self._ix], x0[self._iv] = xy, v
-        P0[np.ix_(self._ix, self._ix)] = Pxy + np.eye(2) * 1e-6
-        P0[np.ix_(self._iv, self._iv)] = Pv + np.eye(2) * 1e-6
-        for name in ("ax", "ay"):
-            if name in self.layout:
-                i = self.layout.index(name)
-                P0[i, i] = 4.0
-        return x0, P0
+        return two_point_prior(self.layout, xy, Pxy, v, Pv, self.initial_speed_sigma)
+
+
+def two_point_prior(layout: tuple[str, ...], xy: np.ndarray, Pxy: np.ndarray, v: np.ndarray, Pv: np.ndarray,
+                    initial_speed_sigma: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """A new track's state and covariance in ``layout`` from a fix (m, m²) and its two-point velocity (m/s, m²/s²),
+    the velocity fused with the zero-mean prior ``N(0, initial_speed_sigma² I)`` (None: not); ``ax, ay`` start at 0
+    with variance 4 m²/s⁴."""
+    if initial_speed_sigma is not None:  # fuse with the zero-mean speed prior N(0, σ² I)
+        P_prior = np.eye(2) * initial_speed_sigma**2
+        K = Pv @ np.linalg.inv(Pv + P_prior)
+        v = v - K @ v
+        Pv = Pv - K @ Pv
+        Pv = 0.5 * (Pv + Pv.T)
+    ix = [layout.index("x"), layout.index("y")]
+    iv = [layout.index("vx"), layout.index("vy")]
+    n = len(layout)
+    x0 = np.zeros(n)
+    P0 = np.zeros((n, n))
+    x0[ix], x0[iv] = xy, v
+    P0[np.ix_(ix, ix)] = Pxy + np.eye(2) * 1e-6
+    P0[np.ix_(iv, iv)] = Pv + np.eye(2) * 1e-6
+    for name in ("ax", "ay"):
+        if name in layout:
+            i = layout.index(name)
+            P0[i, i] = 4.0
+    return x0, P0

@@ -27,12 +27,28 @@ class Track:
     missed : int
         Consecutive position-fixing scans whose detections all fell outside the track's gate: what a divergence
         deleter reads.
+    track_id : int
+        The tracker's id of the track (unique for the tracker's whole run; 0 until the tracker numbers it).
+    hits, scans : int
+        Position-fixing scans that updated the track, and that it was tried against, since it began (the two fixes
+        that started it count in both): what an M-of-N confirmation reads.
+    confirmed : bool
+        Whether the track passed its confirmation logic (a single-target tracker's tracks are born confirmed).
+    evidence : float
+        Sum of the log-likelihood ratios (target vs background car) of the class readings that updated the track.
     """
 
-    def __init__(self, filter: Filter, last_update_t: float) -> None:
+    def __init__(self, filter: Filter, last_update_t: float, *, track_id: int = 0, hits: int = 1, scans: int = 1,
+                 confirmed: bool = True) -> None:
         self.filter = filter
         self.last_update_t = float(last_update_t)
         self.missed = 0
+        self.track_id = int(track_id)
+        self.hits = int(hits)
+        self.scans = int(scans)
+        self.confirmed = bool(confirmed)
+        self.evidence = 0.0
 
     def __repr__(self) -> str:
-        return f"Track(t={self.filter.t:.3f}, last_update_t={self.last_update_t:.3f}, missed={self.missed})"
+        return (f"Track(id={self.track_id}, t={self.filter.t:.3f}, last_update_t={self.last_update_t:.3f}, "
+                f"missed={self.missed}, hits={self.hits}/{self.scans}, confirmed={self.confirmed})")

@@ -1,0 +1,233 @@
+"""Which track is the designated target: a categorical belief over the hypotheses "track k is the target" and "the
+target is in no track", kept by Bayes' rule.
+
+Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` (it is in none of them) carry weights
+``w_k``, ``w_0`` that sum to 1. What changes them:
+
+- **a class reading** (a :class:`~autonomy.sensing.measurement.ClassMeasurement`) on track k: under ``H_k`` its
+  likelihood is ``L_T = C[c_T, o]`` (the target's known class ``c_T``, the sensor's confusion ``C``, the reported
+  class ``o``); under every other hypothesis track k is a background car, ``L_B = Σ_c π(c) C[c, o]`` with the
+  background population's class frequencies ``π``. So ``w_k ← w_k · L_T / L_B`` and all weights are normalised. The
+  track keeps ``evidence = Σ log(L_T / L_B)`` of its own sensors' readings, which a teammate may add to its own belief;
+- **a confirmed new track** j (position ``x_j``, covariance ``P_j``, evidence ``E_j``) splits ``H_0``: if the target
+  is in no track, the new one is the target with probability
+  ``π_j = e^{E_j} p_T(x_j) / (e^{E_j} p_T(x_j) + ρ)``, where ``p_T = N(x_j; μ, Σ + P_j)`` is where the target is
+  believed to be while in no track (the cue, or the last target track's estimate, with ``Σ`` grown by
+  ``(search_speed · Δt)²`` per axis since then) and ``ρ`` the density of background cars that could start a track
+  (cars per m²). Then ``w_j = w_0 π_j`` and ``w_0 ← w_0 (1 − π_j)``;
+- **a deleted track** k: ``w_0 ← w_0 + w_k``; if ``H_k`` was the likelier of the two, the track's last estimate
+  becomes where the target is believed to be (so a lost target is re-acquired from the tracks born near where it was
+  last seen, with the search region growing with time).
+
+The target track is the most probable one if its probability reaches ``min_probability``; otherwise there is none
+and the target is believed to be near ``μ`` (the search centre).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "class_log_likelihood_ratio"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class IdentityConfig:
+    """Target-identity settings.
+
+    Attributes
+    ----------
+    target_classes : Mapping[str, int]
+        The designated target's class per attribute (``worlds.catalog.car_classes``); readings of other attributes
+        are ignored. Empty: identity by position and continuity alone.
+    background : Mapping[str, np.ndarray]
+        Per attribute, the (K,) class frequencies of the background cars (sum 1); an attribute of ``target_classes``
+        missing here takes uniform frequencies.
+    background_density : float
+        Background cars per m² that could start a track (> 0), e.g. the traffic's car count over the road map's area.
+    search_speed : float
+        How fast the believed region of a target in no track grows (m/s per axis, > 0): a car's typical speed.
+    min_probability : float
+        Smallest probability in (0, 1] of the most probable track for it to be taken as the target.
+    """
+
+    target_classes: Mapping[str, int]
+    background: Mapping[str, np.ndarray]
+    background_density: float = 1e-4
+    search_speed: float = 8.0
+    min_probability: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not self.background_density > 0:
+            raise ValueError(f"IdentityConfig.background_density must be > 0 cars/m², got {self.background_density!r}")
+        if not self.search_speed > 0:
+            raise ValueError(f"IdentityConfig.search_speed must be > 0 m/s, got {self.search_speed!r}")
+        if not 0 < self.min_probability <= 1:
+            raise ValueError(f"IdentityConfig.min_probability must be in (0, 1], got {self.min_probability!r}")
+        for name, freq in self.background.items():
+            f = np.asarray(freq, dtype=float)
+            if f.ndim != 1 or np.any(f < 0) or not math.isclose(float(f.sum()), 1.0, abs_tol=1e-9):
+                raise ValueError(f"IdentityConfig.background[{name!r}] must be non-negative frequencies summing to 1")
+
+
+@dataclass(frozen=True)
+class SearchCentre:
+    """Where the target is believed to be while it is in no track: ``N(p, var · I + growth)`` at time ``t``.
+
+    Attributes
+    ----------
+    t : float
+        Time of ``p`` (s).
+    p : np.ndarray
+        (2,) position (m).
+    v : np.ndarray
+        (2,) velocity it is predicted with (m/s).
+    P : np.ndarray
+        (2, 2) position covariance at ``t`` (m²).
+    """
+
+    t: float
+    p: np.ndarray
+    v: np.ndarray
+    P: np.ndarray
+
+    def at(self, t: float, search_speed: float) -> tuple[np.ndarray, np.ndarray]:
+        """Mean (m) and covariance (m²) of the target's position at ``t`` (s): moved with ``v`` for up to 10 s, the
+        covariance grown by ``(search_speed · Δt)²`` per axis."""
+        dt = max(0.0, t - self.t)
+        mean = self.p + self.v * min(dt, 10.0)
+        return mean, self.P + np.eye(2) * (search_speed * dt) ** 2
+
+
+def class_log_likelihood_ratio(attribute: str, likelihood: np.ndarray, config: IdentityConfig) -> float:
+    """``log(L_T / L_B)`` of one class reading whose ``p(observed | true class)`` per class is ``likelihood`` (the
+    module docstring); 0 for an attribute the target has no class for."""
+    if attribute not in config.target_classes:
+        return 0.0
+    lik = np.asarray(likelihood, dtype=float)
+    bg = config.background.get(attribute)
+    freq = np.full(lik.size, 1.0 / lik.size) if bg is None else np.asarray(bg, dtype=float)
+    l_t = float(lik[config.target_classes[attribute]])
+    l_b = float(freq @ lik)
+    if l_t <= 0.0:
+        return -50.0  # the target cannot give this reading (a zero in the confusion matrix): all but impossible
+    return math.log(l_t / max(l_b, 1e-300))
+
+
+class TargetIdentity:
+    """The belief over which confirmed track is the designated target (module docstring).
+
+    Parameters
+    ----------
+    config : IdentityConfig
+        Settings.
+    """
+
+    def __init__(self, config: IdentityConfig) -> None:
+        self.config = config
+        self.weights: dict[int, float] = {}
+        self.w_none = 1.0
+        self.centre: SearchCentre | None = None
+
+    def cue(self, t: float, p: np.ndarray, sigma_m: float) -> None:
+        """The hand-off: the target is near ``p`` (m) at ``t`` (s) with standard deviation ``sigma_m`` (m) per axis."""
+        self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(), v=np.zeros(2),
+                                   P=np.eye(2) * float(sigma_m) ** 2)
+
+    def probability(self, track_id: int) -> float:
+        """Probability that track ``track_id`` is the target (0 for a track the belief does not hold)."""
+        return self.weights.get(track_id, 0.0)
+
+    def target(self) -> int | None:
+        """Id of the most probable track if its probability reaches ``min_probability``, else None."""
+        if not self.weights:
+            return None
+        k = max(self.weights, key=lambda j: (self.weights[j], -j))
+        return k if self.weights[k] >= self.config.min_probability else None
+
+    def confirmed(self, track_id: int, t: float, p: np.ndarray, P: np.ndarray, evidence: float) -> None:
+        """Track ``track_id`` was confirmed at ``t`` (s) at position ``p`` (m) with covariance ``P`` (2×2, m²) and
+        class evidence ``evidence`` (log-likelihood ratio): it takes its share of ``H_0``."""
+        if self.centre is None:  # no cue: every new track is as likely the target as any background car
+            density = self.config.background_density
+        else:
+            mean, S = self.centre.at(t, self.config.search_speed)
+            S = S + np.asarray(P, dtype=float)[:2, :2]
+            d = np.asarray(p, dtype=float)[:2] - mean
+            maha = float(d @ np.linalg.solve(S, d))
+            density = math.exp(-0.5 * maha) / (2.0 * math.pi * math.sqrt(max(np.linalg.det(S), 1e-300)))
+        odds = math.exp(min(evidence, 50.0)) * density / self.config.background_density
+        share = odds / (1.0 + odds)
+        self.weights[track_id] = self.w_none * share
+        self.w_none *= 1.0 - share
+        self._normalise()
+
+    def read(self, track_id: int, log_ratio: float) -> None:
+        """A class reading on track ``track_id`` with log-likelihood ratio ``log_ratio`` (target vs background)."""
+        if track_id not in self.weights or log_ratio == 0.0:
+            return
+        self.weights[track_id] *= math.exp(max(min(log_ratio, 50.0), -50.0))
+        self._normalise()
+
+    def deleted(self, track_id: int, t: float, p: np.ndarray, v: np.ndarray, P: np.ndarray) -> None:
+        """Track ``track_id`` was dropped at ``t`` (s) with last estimate ``p`` (m), ``v`` (m/s), position
+        covariance ``P`` (m²): its weight joins ``H_0``, and if it was likelier the target than ``H_0`` was, the
+        search centre moves to its estimate."""
+        w = self.weights.pop(track_id, None)
+        if w is None:
+            return
+        if w > self.w_none:
+            self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(),
+                                       v=np.asarray(v, dtype=float)[:2].copy(),
+                                       P=np.asarray(P, dtype=float)[:2, :2].copy())
+        self.w_none += w
+        self._normalise()
+
+    def merged(self, kept: int, dropped: int) -> None:
+        """Track ``dropped`` was found to be a duplicate of ``kept``: ``kept`` takes its weight."""
+        w = self.weights.pop(dropped, 0.0)
+        if kept in self.weights:
+            self.weights[kept] += w
+        else:
+            self.w_none += w
+        self._normalise()
+
+    def teammates(self, log_ratios: Mapping[int, float]) -> dict[int, float]:
+        """The probabilities each track would have with the teammates' class evidence ``log_ratios`` (per own track
+        id) added, without changing this belief (evidence from other UAVs' sensors is used, never stored, so it is
+        never counted twice)."""
+        w = {k: v * math.exp(max(min(log_ratios.get(k, 0.0), 50.0), -50.0)) for k, v in self.weights.items()}
+        total = sum(w.values()) + self.w_none
+        return {k: v / total for k, v in w.items()}
+
+    def _normalise(self) -> None:
+        total = sum(self.weights.values()) + self.w_none
+        if not total > 0:
+            self.weights = dict.fromkeys(self.weights, 0.0)
+            self.w_none = 1.0
+            return
+        self.weights = {k: v / total for k, v in self.weights.items()}
+        self.w_none /= total
+
+    def search_estimate(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Mean and covariance of where the target is believed to be at ``t`` (s) while in no track; None without a
+        cue or a lost target track."""
+        if self.centre is None:
+            return None
+        return self.centre.at(t, self.config.search_speed)
+
+
+def background_frequencies(classes: Sequence[Mapping[str, int]], sizes: Mapping[str, int]) -> dict[str, np.ndarray]:
+    """Per attribute, the class frequencies of the cars ``classes`` (one mapping attribute → class each) with one
+    pseudo-count per class (so no class is impossible), for attributes with ``sizes[attr]`` classes."""
+    out = {}
+    for name, k in sizes.items():
+        counts = np.ones(k)
+        for c in classes:
+            if name in c and 0 <= c[name] < k:
+                counts[c[name]] += 1.0
+        out[name] = counts / counts.sum()
+    return out

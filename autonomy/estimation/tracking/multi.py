@@ -1,0 +1,353 @@
+"""The composed tracker's multi-target form: every car a track, and a belief of which track is the designated target.
+
+Per scan (the detections of one sensor taken at one time; filters predict to the scan's time stamp):
+
+1. tracks that went ``lost_after_s`` without an update are dropped (coasting through an occlusion until then);
+2. the associator assigns the scan's detections to the tracks not newer than the scan: global nearest neighbour
+   (``scipy.optimize.linear_sum_assignment`` on the χ²-gated cost matrix, spatially pre-gated) or JPDA (marginal
+   association probabilities; every track takes the PDA update);
+3. assigned tracks update their filters, and their class readings update the target-identity belief
+   (:mod:`.identity`); tentative tracks count the scan towards their M-of-N confirmation (a position-fixing scan is
+   a trial; a hit is an update from it): confirmed at ``M`` hits within their first ``N`` scans, dropped once ``M``
+   can no longer be reached;
+4. the position fixes that no track took start tentative tracks in pairs with earlier ones (:mod:`.pairing`);
+5. two confirmed tracks on one car (closer than ``merge_distance_m`` and ``merge_speed_mps``) become one: the older
+   stays, with the other's identity weight.
+
+:meth:`MultiTargetTracker.step` returns the estimate of the track believed to be the target, or, while no track is,
+where the target is believed to be (the cue, or the lost target track's estimate grown with time) so guidance searches
+there; None without either.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from autonomy.estimation.base import Filter
+from autonomy.estimation.measurements import MeasurementLike
+from autonomy.estimation.models import MotionModel
+from interfaces.state import TargetEstimate, TrackReport
+
+from .identity import IdentityConfig, TargetIdentity, class_log_likelihood_ratio
+from .initiator import FilterFactory
+from .pairing import PairingInitiator
+from .track import Track
+
+__all__ = ["MultiTargetTracker", "MultiTrackerConfig"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class MultiTrackerConfig:
+    """Multi-target settings (the single-target ones, filter, gate, loss, come from a ``TrackerConfig``).
+
+    Attributes
+    ----------
+    associator : {"gnn", "jpda"}
+        Global nearest neighbour or joint probabilistic data association.
+    confirm_m, confirm_n : int
+        M-of-N confirmation: a tentative track is confirmed at ``confirm_m`` hits within its first ``confirm_n``
+        position-fixing scans (the two that started it included), 2 <= M <= N.
+    detection_probability : float
+        JPDA: probability that a target in view is detected, in (0, 1].
+    clutter_density : float
+        JPDA: false alarms per unit of measurement space (e.g. per m·rad for a range-azimuth radar), > 0.
+    merge_distance_m, merge_speed_mps : float
+        Two confirmed tracks closer than this in position (m) and velocity (m/s) are one car, > 0.
+    max_tracks : int
+        Most live tracks (>= 1); no new track starts beyond it (counted in ``starts_refused``).
+    """
+
+    associator: Literal["gnn", "jpda"] = "gnn"
+    confirm_m: int = 3
+    confirm_n: int = 4
+    detection_probability: float = 0.9
+    clutter_density: float = 1e-6
+    merge_distance_m: float = 4.0
+    merge_speed_mps: float = 2.0
+    max_tracks: int = 500
+
+    def __post_init__(self) -> None:
+        if self.associator not in ("gnn", "jpda"):
+            raise ValueError(f"MultiTrackerConfig.associator must be gnn|jpda, got {self.associator!r}")
+        for name in ("confirm_m", "confirm_n", "max_tracks"):
+            if int(getattr(self, name)) != getattr(self, name):
+                raise ValueError(f"MultiTrackerConfig.{name} must be an integer, got {getattr(self, name)!r}")
+        if not 2 <= self.confirm_m <= self.confirm_n:
+            raise ValueError(f"MultiTrackerConfig needs 2 <= confirm_m <= confirm_n, got {self.confirm_m} of "
+                             f"{self.confirm_n}")
+        if not 0 < self.detection_probability <= 1:
+            raise ValueError(f"MultiTrackerConfig.detection_probability must be in (0, 1], got "
+                             f"{self.detection_probability!r}")
+        for name in ("clutter_density", "merge_distance_m", "merge_speed_mps"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"MultiTrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if self.max_tracks < 1:
+            raise ValueError(f"MultiTrackerConfig.max_tracks must be >= 1, got {self.max_tracks!r}")
+
+
+class MultiTargetTracker:
+    """Tracks every car in view and keeps which track is the designated target (module docstring).
+
+    Parameters
+    ----------
+    config : TrackerConfig
+        Filter, motion model, gate, initiation and loss settings (:mod:`autonomy.estimation.tracker`).
+    multi : MultiTrackerConfig
+        Association, confirmation and merging.
+    identity : IdentityConfig
+        The target's classes, the background population and the identity thresholds.
+    model : MotionModel, optional
+        The motion model (default: that of ``config``).
+    filters : FilterFactory, optional
+        A new track's filter (default: ``config.filter`` on ``model``).
+    gating_filter : callable, optional
+        The filter gated against, given a track's filter (default: that filter).
+    """
+
+    def __init__(self, config, multi: MultiTrackerConfig, identity: IdentityConfig, *,
+                 model: MotionModel | None = None, filters: FilterFactory | None = None,
+                 gating_filter=None) -> None:
+        from autonomy.estimation.tracker import ConfiguredFilters, make_motion_model
+
+        from .fixes import PositionFixer
+        from .gate import ChiSquareGate
+
+        self.config = config
+        self.multi = multi
+        model = model if model is not None else make_motion_model(config)
+        self.model = model
+        self.layout = tuple(model.layout)
+        filters = filters if filters is not None else ConfiguredFilters(config, model)
+        self.fixer = PositionFixer(config.target_height, None)
+        self.initiator = PairingInitiator(filters=filters, layout=self.layout,
+                                          max_target_speed=config.max_target_speed,
+                                          tentative_window_s=config.tentative_window_s,
+                                          initial_speed_sigma=config.initial_speed_sigma)
+        self.gate = ChiSquareGate(config.gate_probability)
+        self.associator = _associator(multi, self.gate, model, config.target_height, gating_filter)
+        self.identity = TargetIdentity(identity)
+        self.tracks: list[Track] = []
+        self._ix = [self.layout.index("x"), self.layout.index("y")]
+        self._iv = [self.layout.index("vx"), self.layout.index("vy")]
+        self._next_id = 1
+        self._target: int | None = None
+        self.updates = 0
+        self.initiations = 0
+        self.confirmations = 0
+        self.dropped_tentative = 0
+        self.dropped_lost = 0
+        self.merges = 0
+        self.gated_out = 0
+        self.starts_refused = 0
+        self.used_by_sensor: dict[str, int] = {}
+        self._step_detections: dict[int, list] = {}
+
+    # -- the estimator interface ---------------------------------------------------------------------------------
+    def cue(self, t: float, p_W: np.ndarray, sigma_m: float) -> None:
+        """The hand-off: the target is near ``p_W`` (m) at ``t`` (s), ``sigma_m`` (m) per axis."""
+        self.identity.cue(t, p_W, sigma_m)
+
+    def step(self, t: float, detections: Sequence[MeasurementLike]) -> TargetEstimate | None:
+        """Absorb ``detections`` (sorted by ``t_meas``) and return the target's estimate at ``t`` (s): its track's,
+        or the search centre's while no track is the target (module docstring)."""
+        self._step_detections = {}
+        for t_meas, scan in self._scans(detections):
+            self._drop_lost(t_meas)
+            self._process_scan(t_meas, scan)
+        self._drop_lost(t)
+        self._target = self.identity.target()
+        track = self._track(self._target)
+        if track is not None:
+            if t > track.filter.t:
+                track.filter.predict(t)
+            return self._estimate(track)
+        search = self.identity.search_estimate(t)
+        if search is None:
+            return None
+        mean, S = search
+        P = np.zeros((4, 4))
+        P[:2, :2] = S
+        P[2:, 2:] = np.eye(2) * self.identity.config.search_speed ** 2
+        return TargetEstimate(t=float(t), p_W=mean, v_W=np.zeros(2), P=P)
+
+    @property
+    def target_track_id(self) -> int | None:
+        """Id of the track taken for the target after the last step, or None."""
+        return self._target
+
+    @property
+    def filter(self) -> Filter | None:
+        """The target track's filter, or None."""
+        track = self._track(self._target)
+        return None if track is None else track.filter
+
+    def detections_of(self, track_id: int) -> list[MeasurementLike]:
+        """The detections that updated track ``track_id`` during the last step, in time order (under JPDA, each
+        scan's most probable one)."""
+        return list(self._step_detections.get(track_id, ()))
+
+    def track_reports(self) -> list[TrackReport]:
+        """Every live track at its filter's time, with its target probability and own class evidence."""
+        return [TrackReport(track_id=tr.track_id, estimate=self._estimate(tr),
+                            target_probability=min(1.0, max(0.0, self.identity.probability(tr.track_id))),
+                            evidence=tr.evidence, confirmed=tr.confirmed) for tr in self.tracks]
+
+    # -- a scan --------------------------------------------------------------------------------------------------
+    def _scans(self, detections: Sequence[MeasurementLike]) -> list[tuple[float, list]]:
+        scans: dict[tuple[float, object], list] = {}
+        for d in detections:
+            scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
+        return [(key[0], dets) for key, dets in sorted(scans.items(), key=lambda kv: (kv[0][0], str(kv[0][1])))]
+
+    def _process_scan(self, t_meas: float, scan: Sequence[MeasurementLike]) -> None:
+        live = [tr for tr in self.tracks if tr.filter.t <= t_meas]
+        fixing = self.fixer.fixes_position(scan)
+        result = self.associator.assign(live, scan)
+        self.gated_out += result.gated_out
+        hit: set[int] = set()
+        if result.weights is None:
+            for i, j in result.pairs:
+                track, det = live[i], result.detections[j]
+                track.filter.update(det)
+                self._read_classes(track, [(1.0, det)])
+                self._updated(track, det, t_meas)
+                hit.add(id(track))
+        else:
+            from .jpda import pda_update
+
+            W = np.asarray(result.weights)
+            for i, track in enumerate(live):
+                if W[i, 1:].sum() <= 1e-12:
+                    continue
+                pda_update(track.filter, result.detections, W[i])
+                self._read_classes(track, [(float(W[i, 1 + j]), d) for j, d in enumerate(result.detections)],
+                                   none_weight=float(W[i, 0]))
+                j = int(np.argmax(W[i, 1:]))
+                self._updated(track, result.detections[j], t_meas)
+                if W[i, 0] < 0.5:
+                    hit.add(id(track))
+        if fixing:
+            self._confirmations(live, hit, t_meas)
+            unused = [result.detections[j] for j in result.unused]
+            self._initiate(self.fixer.fixes(unused))
+        self._merge()
+
+    def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
+        track.last_update_t = t_meas
+        track.missed = 0
+        self._step_detections.setdefault(track.track_id, []).append(det)
+        self.updates += 1
+        self.used_by_sensor[det.sensor_id] = self.used_by_sensor.get(det.sensor_id, 0) + 1
+
+    def _read_classes(self, track: Track, weighted: Sequence[tuple[float, MeasurementLike]],
+                      none_weight: float = 0.0) -> None:
+        """Class readings of the detections that updated ``track`` (weights: association probabilities): the
+        likelihood ratio of the mixture ``β₀ + Σ βⱼ L_T,j / L_B,j``."""
+        cfg = self.identity.config
+        ratio, any_class = none_weight, False
+        for w, det in weighted:
+            classes = getattr(det, "classes", ())
+            llr = sum(class_log_likelihood_ratio(c.attribute, c.likelihood(), cfg) for c in classes)
+            any_class = any_class or bool(classes)
+            ratio += w * np.exp(np.clip(llr, -50.0, 50.0))
+        if not any_class or ratio <= 0.0:
+            return
+        llr = float(np.log(ratio))
+        track.evidence += llr
+        if track.confirmed:
+            self.identity.read(track.track_id, llr)
+
+    def _confirmations(self, live: Sequence[Track], hit: set[int], t_meas: float) -> None:
+        m, n = self.multi.confirm_m, self.multi.confirm_n
+        for track in live:
+            if track.confirmed:
+                continue
+            track.scans += 1
+            track.hits += id(track) in hit
+            if track.hits >= m:
+                track.confirmed = True
+                self.confirmations += 1
+                est = self._estimate(track)
+                self.identity.confirmed(track.track_id, t_meas, est.p_W, est.P[:2, :2], track.evidence)
+            elif track.hits + (n - track.scans) < m:
+                self.tracks.remove(track)
+                self.dropped_tentative += 1
+
+    def _initiate(self, fixes) -> None:
+        for track in self.initiator.initiate(fixes):
+            if len(self.tracks) >= self.multi.max_tracks:
+                self.starts_refused += 1
+                continue
+            track.track_id = self._next_id
+            self._next_id += 1
+            self.tracks.append(track)
+            self.initiations += 1
+            if track.hits >= self.multi.confirm_m:  # M = 2: the starting pair confirms it
+                track.confirmed = True
+                self.confirmations += 1
+                est = self._estimate(track)
+                self.identity.confirmed(track.track_id, track.filter.t, est.p_W, est.P[:2, :2], track.evidence)
+
+    def _drop_lost(self, t: float) -> None:
+        lost_after = self.config.lost_after_s
+        for track in [tr for tr in self.tracks if t - tr.last_update_t > lost_after]:
+            self.tracks.remove(track)
+            self.dropped_lost += 1
+            if track.confirmed:
+                est = self._estimate(track)
+                self.identity.deleted(track.track_id, track.filter.t, est.p_W, est.v_W, est.P[:2, :2])
+
+    def _merge(self) -> None:
+        confirmed = [tr for tr in self.tracks if tr.confirmed]
+        if len(confirmed) < 2:
+            return
+        p = np.array([tr.filter.x[self._ix] for tr in confirmed])
+        v = np.array([tr.filter.x[self._iv] for tr in confirmed])
+        close = np.linalg.norm(p[:, None] - p[None], axis=-1) < self.multi.merge_distance_m
+        close &= np.linalg.norm(v[:, None] - v[None], axis=-1) < self.multi.merge_speed_mps
+        np.fill_diagonal(close, False)
+        gone: set[int] = set()
+        for a, b in zip(*np.nonzero(np.triu(close)), strict=True):
+            ta, tb = confirmed[a], confirmed[b]
+            if id(ta) in gone or id(tb) in gone:
+                continue
+            keep, drop = (ta, tb) if ta.track_id < tb.track_id else (tb, ta)
+            self.identity.merged(keep.track_id, drop.track_id)
+            keep.evidence = max(keep.evidence, drop.evidence)
+            gone.add(id(drop))
+            self.merges += 1
+        if gone:
+            self.tracks = [tr for tr in self.tracks if id(tr) not in gone]
+
+    # -- helpers -------------------------------------------------------------------------------------------------
+    def _track(self, track_id: int | None) -> Track | None:
+        if track_id is None:
+            return None
+        for tr in self.tracks:
+            if tr.track_id == track_id:
+                return tr
+        return None
+
+    def _estimate(self, track: Track) -> TargetEstimate:
+        x, P = track.filter.x, track.filter.P
+        idx = self._ix + self._iv
+        return TargetEstimate(t=track.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=P[np.ix_(idx, idx)])
+
+
+def _associator(multi: MultiTrackerConfig, gate, model: MotionModel, target_height: float, gating_filter):
+    """The configured associator of a scan's detections to many tracks."""
+    from .assignment import GlobalNearestNeighbourAssociator
+    from .jpda import JointProbabilisticAssociator
+
+    if multi.associator == "gnn":
+        return GlobalNearestNeighbourAssociator(gate, model=model, target_height=target_height,
+                                                gating_filter=gating_filter)
+    return JointProbabilisticAssociator(gate, model=model, target_height=target_height, gating_filter=gating_filter,
+                                        detection_probability=multi.detection_probability,
+                                        clutter_density=multi.clutter_density)
+
+

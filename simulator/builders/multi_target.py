@@ -1,0 +1,83 @@
+"""Multi-target tracking for a UAV: when its tracker holds every car, and what it is told about the target.
+
+:func:`tracking_mode` resolves ``estimator.tracking.mode`` (``auto``: multi when the world has more than one ground
+vehicle that is not a decoy). :func:`multi_target` turns the estimator the registry built into its multi-target
+form: a built-in tracker (any filter, the road-constrained ones too) becomes a
+:class:`~autonomy.estimation.tracking.multi.MultiTargetTracker` with the same filters, gate and loss settings; a
+user's single-target estimator is fed the target track's detections
+(:class:`~autonomy.estimation.tracking.gated.TargetGatedEstimator`); an estimator that is already multi-target (it
+has ``track_reports``) or holds sets is left as it is.
+
+What the team knows of the target (:func:`identity_config`): its classes (colour, body type, length class, from its
+world-file entry: the hand-off describes the car), the class frequencies of the other cars (the traffic census) and
+their density over the map.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
+from autonomy.estimation.tracking.gated import TargetGatedEstimator
+from autonomy.estimation.tracking.identity import IdentityConfig, background_frequencies
+from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerConfig
+from worlds.catalog import CAR_ATTRIBUTES, car_classes
+from worlds.schema import GroundVehicleSpec, UavSpec, World
+
+__all__ = ["identity_config", "multi_target", "tracking_mode"]
+
+
+def tracking_mode(world: World, uav: UavSpec) -> str:
+    """``single`` or ``multi`` for ``uav``'s estimator (module docstring)."""
+    est = uav.autonomy.estimator
+    if est.type == "set_membership":
+        return "single"
+    mode = est.tracking.mode
+    if mode != "auto":
+        return mode
+    return "multi" if sum(g.role != "decoy" for g in world.ground_vehicles) > 1 else "single"
+
+
+def _classes(g: GroundVehicleSpec) -> dict[str, int]:
+    return car_classes(g.type, getattr(g, "colour", "white"))
+
+
+def identity_config(world: World, uav: UavSpec) -> IdentityConfig:
+    """What ``uav``'s tracker knows of the (first) designated target and of the other cars (module docstring)."""
+    spec = uav.autonomy.estimator.tracking
+    targets = world.target_ids()
+    by_id = {g.id: g for g in world.ground_vehicles}
+    target = by_id.get(targets[0]) if targets else None
+    others = [g for g in world.ground_vehicles if g.role != "decoy" and g.id not in targets]
+    area = float(np.prod(world.terrain.size))
+    return IdentityConfig(
+        target_classes=_classes(target) if target is not None else {},
+        background=background_frequencies([_classes(g) for g in others],
+                                          {k: len(v) for k, v in CAR_ATTRIBUTES.items()}),
+        background_density=max(len(others), 1) / area,
+        search_speed=spec.search_speed, min_probability=spec.min_target_probability)
+
+
+def _multi_config(uav: UavSpec) -> MultiTrackerConfig:
+    spec = uav.autonomy.estimator.tracking
+    return MultiTrackerConfig(associator=spec.associator, confirm_m=spec.confirm_m, confirm_n=spec.confirm_n,
+                              detection_probability=spec.detection_probability,
+                              clutter_density=spec.clutter_density, merge_distance_m=spec.merge_distance_m,
+                              merge_speed_mps=spec.merge_speed_mps, max_tracks=spec.max_tracks)
+
+
+def multi_target(estimator: Any, world: World, uav: UavSpec) -> Any:
+    """``estimator`` in its multi-target form when :func:`tracking_mode` says multi (module docstring)."""
+    if tracking_mode(world, uav) != "multi" or hasattr(estimator, "track_reports"):
+        return estimator
+    identity = identity_config(world, uav)
+    multi = _multi_config(uav)
+    if isinstance(estimator, SingleTargetTracker):
+        return MultiTargetTracker(estimator.config, multi, identity, model=estimator.model,
+                                  filters=estimator.initiator.filters,
+                                  gating_filter=estimator.associator.distance.gating_filter)
+    if uav.autonomy.estimator.type == "set_membership":
+        return estimator
+    return TargetGatedEstimator(estimator, MultiTargetTracker(TrackerConfig(), multi, identity))

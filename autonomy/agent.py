@@ -16,10 +16,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+from autonomy.diagnostics import HoldsTracks
 from autonomy.fusion.track_fusion import TrackFusion
 from autonomy.sensing.measurement import Detection
 from interfaces.setpoints import Setpoint
-from interfaces.state import OwnState, TargetEstimate, TeammateState
+from interfaces.state import OwnState, TargetEstimate, TeammateState, TrackPicture
 
 __all__ = ["Agent", "AgentOutput", "GuidanceLaw", "TargetEstimator"]
 
@@ -98,7 +99,7 @@ class Agent:
         self._pending.extend(detections)
 
     def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState],
-             shared: Sequence[TargetEstimate] = ()) -> AgentOutput:
+             shared: Sequence[TargetEstimate | TrackPicture] = ()) -> AgentOutput:
         """Run estimation, fusion with the teammates' ``shared`` estimates, and guidance at time ``t`` (s)."""
         ready = self.take_ready(t)
         return self.act(t, own, teammates, self.estimator.step(t, ready), len(ready), shared)
@@ -113,9 +114,21 @@ class Agent:
         return ready
 
     def act(self, t: float, own: OwnState, teammates: Sequence[TeammateState], local: TargetEstimate | None,
-            used_detections: int, shared: Sequence[TargetEstimate] = ()) -> AgentOutput:
-        """Fusion (if any) of ``local`` with ``shared`` and guidance at ``t`` (s), on an estimate already made."""
-        self.estimate = self.fusion.fuse(t, local, shared) if self.fusion is not None else local
+            used_detections: int, shared: Sequence[TargetEstimate | TrackPicture] = ()) -> AgentOutput:
+        """Fusion (if any) of ``local`` with ``shared`` and guidance at ``t`` (s), on an estimate already made.
+
+        An estimator that holds many tracks (:class:`~autonomy.diagnostics.HoldsTracks`) fuses its tracks with the
+        teammates' track pictures after associating them; ``shared`` estimates of single-target teammates are
+        fused as before."""
+        pictures = [s for s in shared if isinstance(s, TrackPicture)]
+        estimates = [s for s in shared if not isinstance(s, TrackPicture)]
+        if self.fusion is None:
+            self.estimate = local
+        elif isinstance(self.estimator, HoldsTracks):
+            self.estimate = self.fusion.fuse_tracks(t, local, self.estimator.track_reports(),
+                                                    self.estimator.target_track_id, pictures)
+        else:
+            self.estimate = self.fusion.fuse(t, local, estimates)
         law = self.idle if self.estimate is None and self.idle is not None else self.guidance
         setpoint = law.command(own, self.estimate, teammates, t)
         return AgentOutput(setpoint=setpoint, estimate=self.estimate, local_estimate=local,

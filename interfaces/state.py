@@ -13,7 +13,7 @@ import numpy as np
 
 from interfaces._checks import finite_number, finite_vector
 
-__all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackReport"]
+__all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackPicture", "TrackReport"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -132,6 +132,29 @@ class TrackReport:
             raise ValueError(f"TrackReport.target_probability must be in [0, 1], got {p}")
         object.__setattr__(self, "target_probability", p)
         object.__setattr__(self, "evidence", finite_number("TrackReport", "evidence", self.evidence))
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackPicture:
+    """What a UAV with a multi-target tracker shares: its confirmed tracks and which it takes for the target.
+
+    Attributes
+    ----------
+    t : float
+        When it was sent (s); each track's estimate holds at its own ``estimate.t``.
+    tracks : tuple[TrackReport, ...]
+        The confirmed tracks.
+    target_track_id : int | None
+        The track the sender takes for the target, or None.
+    """
+
+    t: float
+    tracks: tuple[TrackReport, ...]
+    target_track_id: int | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "t", finite_number("TrackPicture", "t", self.t))
+        object.__setattr__(self, "tracks", tuple(self.tracks))
 
 
 @dataclass(frozen=True, kw_only=True)

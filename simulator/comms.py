@@ -17,10 +17,10 @@ import numpy as np
 from autonomy.agent import Agent
 from autonomy.diagnostics import PlansPath
 from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
-from interfaces.state import TargetEstimate, TeammateState
+from interfaces.state import TargetEstimate, TeammateState, TrackPicture
 from autonomy.sensing.channel import Channel, scheduled_links
 from autonomy.sensing.measurement import Detection
-from autonomy.sensing.messages import EstimateMessage, StateMessage
+from autonomy.sensing.messages import EstimateMessage, StateMessage, TrackListMessage
 from autonomy.sensing.scene import SceneQuery
 from simulator.truth import UavFleet, yaw_of
 from worlds.schema import CommsSection
@@ -67,15 +67,15 @@ class Comms:
         self.share_estimates = share_estimates
         self.shared_received: dict[int, int] = {}  # per UAV: teammates' detections delivered to it
         self._heard: dict[int, dict[int, TeammateState]] = {}
-        self._shared: dict[int, dict[int, TargetEstimate]] = {}
-        self._local: dict[int, TargetEstimate | None] = {}
+        self._shared: dict[int, dict[int, TargetEstimate | TrackPicture]] = {}
+        self._local: dict[int, TargetEstimate | TrackPicture | None] = {}
 
     def positions(self) -> dict[str, np.ndarray]:
         """Every UAV's position by id: where the radio sends from and to."""
         st = self.quads.state
         return {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}
 
-    def inbox(self, i: int, t: float, tick: int) -> tuple[list[TeammateState], list[TargetEstimate]]:
+    def inbox(self, i: int, t: float, tick: int) -> tuple[list[TeammateState], list[TargetEstimate | TrackPicture]]:
         """What UAV ``i`` knows of its team at ``t`` (s): states and shared target estimates.
 
         Perfect comms: the teammates' true states and their latest local estimates. Radio: the last of each that got
@@ -98,16 +98,24 @@ class Comms:
             elif isinstance(msg, EstimateMessage):
                 n = msg.x.size // 2
                 shared[j] = TargetEstimate(t=msg.t_estimate, p_W=msg.x[:n], v_W=msg.x[n:], P=msg.P)
+            elif isinstance(msg, TrackListMessage):
+                shared[j] = msg.picture
             elif isinstance(msg, DetectionMessage):
                 self._deliver_detections(i, relayed(msg.detections, env.t_arrival - msg.t_sent))
         return [known[j] for j in sorted(known)], [shared[j] for j in sorted(shared)]
 
-    def share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int) -> None:
-        """UAV ``i``'s local estimate, for its teammates (when the team shares estimates)."""
+    def share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int,
+                       picture: TrackPicture | None = None) -> None:
+        """UAV ``i``'s local estimate, for its teammates (when the team shares estimates); a UAV with many tracks
+        shares its track ``picture`` instead."""
         if not self.share_estimates:
             return
         if self.channel is None:
-            self._local[i] = est
+            self._local[i] = picture if picture is not None else est
+            return
+        if picture is not None:
+            self.channel.send(TrackListMessage(sender=self.uav_ids[i], receiver=None, t_sent=t, picture=picture),
+                              self.positions(), tick)
             return
         if est is None or est.P is None:
             return

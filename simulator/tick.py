@@ -22,7 +22,8 @@ from typing import Protocol
 import numpy as np
 
 from interfaces.setpoints import Setpoint
-from interfaces.state import OwnState, TargetEstimate
+from autonomy.diagnostics import HoldsTracks
+from interfaces.state import OwnState, TargetEstimate, TrackPicture
 from autonomy.sensing.channel import Channel
 from autonomy.sensing.measurement import SensorOutput
 from autonomy.sensing.scene import SceneQuery, SensorPose
@@ -42,6 +43,15 @@ __all__ = ["Assembly", "Physics", "TickContext", "WALL_PHASES"]
 # of all vehicles, the PyBullet step, sensors (with their raycasts), the agents (estimation, fusion, guidance and the
 # messages between them), recording (events, truth, collision checks)
 WALL_PHASES = ("vehicles", "physics", "sensors", "autonomy", "record")
+
+
+def track_picture(estimator: object, t: float) -> TrackPicture | None:
+    """What a UAV with many tracks shares at ``t`` (s): its confirmed tracks and its target track; None for a
+    single-target estimator."""
+    if not isinstance(estimator, HoldsTracks):
+        return None
+    return TrackPicture(t=t, tracks=tuple(r for r in estimator.track_reports() if r.confirmed),
+                        target_track_id=estimator.target_track_id)
 
 
 class Physics(Protocol):
@@ -173,7 +183,7 @@ class Assembly:
             result = decide[a.uav](self.truth.own_state(a.uav, t), mates, shared)
             self.quads.set_command(a.uav, result.setpoint)
             self.comms.broadcast_state(a.uav, a.agent.guidance, t, tick)  # after planning: the plan starts here
-            self.comms.share_estimate(a.uav, result.local_estimate, t, tick)
+            self.comms.share_estimate(a.uav, result.local_estimate, t, tick, picture=track_picture(a.agent.estimator, t))
             self.latest_estimates[a.uav] = result.estimate
             self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint

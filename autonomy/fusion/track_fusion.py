@@ -16,7 +16,7 @@ from typing import Literal
 import numpy as np
 
 from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
-from interfaces.state import TargetEstimate
+from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
 __all__ = ["TrackFusionConfig", "TrackFusion", "predict_estimate"]
 
@@ -68,11 +68,24 @@ def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
 
 
 class TrackFusion:
-    """Fuses the own estimate with teammates' shared estimates at a given time."""
+    """Fuses the own estimate with teammates' shared estimates at a given time; among traffic, the teammates' tracks
+    with one's own after associating them (:meth:`fuse_tracks`)."""
 
     def __init__(self, config: TrackFusionConfig) -> None:
+        from autonomy.fusion.track_association import TeamTrackFusion
+
         self.config = config
         self.fusions = 0
+        self.team = TeamTrackFusion(config.method, config.max_age_s, config.q)
+
+    def fuse_tracks(self, t: float, local: TargetEstimate | None, own: Sequence[TrackReport], own_target: int | None,
+                    pictures: Sequence[TrackPicture]) -> TargetEstimate | None:
+        """The team's target estimate at ``t`` (s) from one's own tracks and the teammates' track pictures
+        (:class:`~autonomy.fusion.track_association.TeamTrackFusion`); ``local`` without a team target."""
+        result = self.team.fuse(t, local, own, own_target, pictures)
+        if result.fused_with:
+            self.fusions += 1
+        return result.estimate
 
     def fuse(self, t: float, own: TargetEstimate | None, shared: Sequence[TargetEstimate]) -> TargetEstimate | None:
         """The fused estimate at ``t`` (s); the own estimate alone (or the freshest shared one) when nothing else is

@@ -10,7 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Envelope", "EstimateMessage", "InformationMessage", "Message", "PlanMessage"]
+from interfaces.state import TrackPicture
+
+__all__ = ["Envelope", "EstimateMessage", "InformationMessage", "Message", "PlanMessage", "TrackListMessage"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -58,6 +60,20 @@ class EstimateMessage(Message):
     x: np.ndarray
     P: np.ndarray
     t_estimate: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackListMessage(Message):
+    """A multi-target tracker's confirmed tracks, with ids, target probabilities and class evidence, and the track
+    the sender takes for the target (track-to-track association and fusion in a team among traffic).
+
+    Attributes
+    ----------
+    picture : TrackPicture
+        The tracks.
+    """
+
+    picture: TrackPicture
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -1,0 +1,174 @@
+"""Team fusion among traffic: associate the teammates' tracks with one's own before fusing, and agree on the target.
+
+Each UAV with a multi-target tracker shares a :class:`~interfaces.state.TrackPicture` (its confirmed tracks, their
+target probabilities and the class evidence of its own sensors). At a fusion step, for each teammate's picture no
+older than ``max_age_s``:
+
+1. every track is predicted to the fusion time (constant velocity, :func:`~.track_fusion.predict_estimate`);
+2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
+   distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
+   does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
+   pairs are one car;
+3. the team's belief of which car is the target: one's own track k has weight ``p_k · exp(Σ E_j)``, its own target
+   probability times the teammates' class evidence ``E_j`` of the tracks assigned to it (evidence of other sensors,
+   so nothing is counted twice); a teammate's track assigned to none of one's own competes with weight
+   ``p_none · p_j`` (one's own belief that the target is in no track, times the teammate's). Normalised with
+   ``p_none``;
+4. the most probable candidate, if its probability is at least ``min_probability``, is the target: its estimate is
+   fused (convex or covariance intersection) with every teammate track assigned to it. Otherwise the UAV's own
+   estimate stands (its target track, or where it searches).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.special import gammaincinv
+
+from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
+from interfaces.state import TargetEstimate, TrackPicture, TrackReport
+
+from .track_fusion import predict_estimate
+
+__all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks"]
+
+
+@dataclass(frozen=True)
+class TeamTarget:
+    """The team's target at a fusion step.
+
+    Attributes
+    ----------
+    estimate : TargetEstimate | None
+        The fused estimate of the target (None: no candidate reached ``min_probability``).
+    probability : float
+        Its team probability.
+    own_track_id : int | None
+        One's own track it is (None: a teammate's track one does not hold, or none).
+    fused_with : int
+        Teammate tracks fused into it.
+    """
+
+    estimate: TargetEstimate | None
+    probability: float
+    own_track_id: int | None
+    fused_with: int
+
+
+def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate],
+                     threshold: float) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)`` of ``own[i]`` and ``other[j]`` (estimates at one time) that are one car: the assignment of
+    least total Mahalanobis position distance among the pairs under ``threshold`` (χ², 2 degrees of freedom)."""
+    if not own or not other:
+        return []
+    pa = np.array([e.p_W[:2] for e in own])
+    pb = np.array([e.p_W[:2] for e in other])
+    Pa = np.array([e.P[:2, :2] for e in own])
+    Pb = np.array([e.P[:2, :2] for e in other])
+    d = pa[:, None, :] - pb[None, :, :]                      # (n, m, 2)
+    S = Pa[:, None] + Pb[None, :]                            # (n, m, 2, 2)
+    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
+    maha = (S[..., 1, 1] * d[..., 0] ** 2 - 2 * S[..., 0, 1] * d[..., 0] * d[..., 1]
+            + S[..., 0, 0] * d[..., 1] ** 2) / np.maximum(det, 1e-300)
+    big = threshold * 10.0 + 1.0
+    cost = np.where(maha <= threshold, maha, big)
+    rows, cols = linear_sum_assignment(cost)
+    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
+
+
+class TeamTrackFusion:
+    """Associates the teammates' tracks with one's own, picks the team's target and fuses it (module docstring).
+
+    Parameters
+    ----------
+    method : {"convex", "covariance_intersection"}
+        How associated tracks are fused.
+    max_age_s : float
+        Pictures older than this are ignored (s).
+    q : float
+        White-acceleration density used to predict tracks to the fusion time (m²/s³).
+    gate_probability : float
+        Probability of the association gate, in (0, 1).
+    min_probability : float
+        Team probability the target candidate needs, in (0, 1].
+    """
+
+    def __init__(self, method: str, max_age_s: float, q: float, gate_probability: float = 0.999,
+                 min_probability: float = 0.5) -> None:
+        if method not in ("convex", "covariance_intersection"):
+            raise ValueError(f"TeamTrackFusion.method must be convex|covariance_intersection, got {method!r}")
+        if not 0 < gate_probability < 1:
+            raise ValueError(f"TeamTrackFusion.gate_probability must be in (0, 1), got {gate_probability!r}")
+        self.method = method
+        self.max_age_s = float(max_age_s)
+        self.q = float(q)
+        self.threshold = float(2.0 * gammaincinv(1.0, gate_probability))
+        self.min_probability = float(min_probability)
+        self.associated = 0
+        self.disagreements = 0  # steps where the team's target was not one's own target track
+
+    def fuse(self, t: float, local: TargetEstimate | None, own: Sequence[TrackReport], own_target: int | None,
+             pictures: Sequence[TrackPicture]) -> TeamTarget:
+        """The team's target at ``t`` (s) from one's own confirmed tracks ``own`` (``own_target`` the one taken for
+        the target; ``local`` one's own target estimate) and the teammates' ``pictures`` (module docstring)."""
+        mine = [r for r in own if r.confirmed and r.estimate.P is not None]
+        own_est = [predict_estimate(r.estimate, t, self.q) for r in mine]
+        weight = np.array([r.target_probability for r in mine], dtype=float)
+        p_none = max(0.0, 1.0 - float(weight.sum()))
+        log_boost = np.zeros(len(mine))
+        fused_parts: list[list[TargetEstimate]] = [[] for _ in mine]
+        loose: list[tuple[float, TargetEstimate]] = []
+        for pic in pictures:
+            if not 0.0 <= t - pic.t <= self.max_age_s:
+                continue
+            theirs = [r for r in pic.tracks if r.estimate.P is not None]
+            their_est = [predict_estimate(r.estimate, t, self.q) for r in theirs]
+            pairs = associate_tracks(own_est, their_est, self.threshold)
+            self.associated += len(pairs)
+            taken = set()
+            for i, j in pairs:
+                log_boost[i] += theirs[j].evidence
+                fused_parts[i].append(their_est[j])
+                taken.add(j)
+            for j, r in enumerate(theirs):
+                if j not in taken and r.target_probability > 0.0:
+                    loose.append((p_none * r.target_probability, their_est[j]))
+        w = weight * np.exp(np.clip(log_boost, -50.0, 50.0))
+        total = float(w.sum()) + p_none
+        if total <= 0.0:
+            return TeamTarget(estimate=local, probability=0.0, own_track_id=None, fused_with=0)
+        best_own = int(np.argmax(w)) if len(w) else -1
+        best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
+        p_own = float(w[best_own]) / total if best_own >= 0 else 0.0
+        p_loose = loose[best_loose][0] / total if best_loose >= 0 else 0.0
+        if max(p_own, p_loose) < self.min_probability:
+            return TeamTarget(estimate=local, probability=max(p_own, p_loose), own_track_id=None, fused_with=0)
+        if p_own >= p_loose:
+            track_id = mine[best_own].track_id
+            if track_id != own_target:
+                self.disagreements += 1
+            parts = [own_est[best_own], *fused_parts[best_own]]
+            return TeamTarget(estimate=self._fuse(t, parts), probability=p_own, own_track_id=track_id,
+                              fused_with=len(parts) - 1)
+        self.disagreements += 1
+        return TeamTarget(estimate=loose[best_loose][1], probability=p_loose, own_track_id=None, fused_with=0)
+
+    def _fuse(self, t: float, parts: list[TargetEstimate]) -> TargetEstimate:
+        if len(parts) == 1:
+            return parts[0]
+        xs = [np.concatenate([e.p_W, e.v_W]) for e in parts]
+        Ps = [np.asarray(e.P) for e in parts]
+        if self.method == "convex":
+            x, P = xs[0], Ps[0]
+            for xb, Pb in zip(xs[1:], Ps[1:], strict=True):
+                f = state_vector_fusion(x, P, xb, Pb)
+                x, P = f.x, f.P
+        else:
+            f = covariance_intersection(xs, Ps)
+            x, P = f.x, f.P
+        n = parts[0].p_W.size
+        return TargetEstimate(t=t, p_W=x[:n], v_W=x[n:], P=P)
+

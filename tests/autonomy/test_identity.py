@@ -1,0 +1,114 @@
+"""Target identity: the belief over which track is the target follows Bayes' rule, computed here by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from autonomy.estimation.tracking.identity import (IdentityConfig, TargetIdentity, background_frequencies,
+                                                   class_log_likelihood_ratio)
+from autonomy.sensing.measurement import ClassMeasurement
+
+# three colours; the target is colour 2; the background is 60 % colour 0, 30 % colour 1, 10 % colour 2
+BG = {"colour": np.array([0.6, 0.3, 0.1])}
+C = np.array([[0.8, 0.1, 0.1],
+              [0.1, 0.8, 0.1],
+              [0.05, 0.15, 0.8]])
+
+
+def _config(**kw) -> IdentityConfig:
+    return IdentityConfig(target_classes={"colour": 2}, background=BG, **kw)
+
+
+def test_class_reading_ratio_is_target_over_background_likelihood():
+    reading = ClassMeasurement(attribute="colour", observed=2, confusion=C)
+    l_t = C[2, 2]
+    l_b = 0.6 * C[0, 2] + 0.3 * C[1, 2] + 0.1 * C[2, 2]
+    assert class_log_likelihood_ratio("colour", reading.likelihood(), _config()) == pytest.approx(math.log(l_t / l_b))
+    # an attribute the target has no class for carries no evidence
+    assert class_log_likelihood_ratio("length", np.array([0.9, 0.1]), _config()) == 0.0
+
+
+def test_belief_after_readings_matches_bayes_by_hand():
+    ident = TargetIdentity(_config(background_density=1e-3))
+    # no cue: a confirmed track's prior odds of being the target are its density ratio, here 1 (density = ρ)
+    ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    ident.confirmed(2, 0.0, np.ones(2) * 50, np.eye(2), evidence=0.0)
+    w1 = 0.5
+    w0 = 0.5
+    w2 = w0 * 0.5
+    w0 = w0 * 0.5
+    assert ident.probability(1) == pytest.approx(w1)
+    assert ident.probability(2) == pytest.approx(w2)
+    assert ident.w_none == pytest.approx(w0)
+    # track 2 reads the target's colour twice, track 1 reads colour 0 once
+    for track, observed in ((2, 2), (2, 2), (1, 0)):
+        lik = C[:, observed]
+        llr = class_log_likelihood_ratio("colour", lik, ident.config)
+        ident.read(track, llr)
+    l_b = lambda o: float(BG["colour"] @ C[:, o])  # noqa: E731
+    r2 = (C[2, 2] / l_b(2)) ** 2
+    r1 = C[2, 0] / l_b(0)
+    unnorm = {1: w1 * r1, 2: w2 * r2, 0: w0}
+    total = sum(unnorm.values())
+    assert ident.probability(1) == pytest.approx(unnorm[1] / total, rel=1e-12)
+    assert ident.probability(2) == pytest.approx(unnorm[2] / total, rel=1e-12)
+    assert ident.w_none == pytest.approx(unnorm[0] / total, rel=1e-12)
+    assert ident.target() == 2
+
+
+def test_cue_makes_the_track_at_the_cued_place_the_target():
+    rho = 1e-5
+    ident = TargetIdentity(_config(background_density=rho, search_speed=5.0))
+    ident.cue(0.0, np.array([100.0, 0.0]), sigma_m=20.0)
+    P = np.eye(2) * 25.0
+    ident.confirmed(7, 2.0, np.array([110.0, 5.0]), P, evidence=0.0)   # near the cue
+    S = np.eye(2) * (400.0 + (5.0 * 2.0) ** 2) + P
+    d = np.array([10.0, 5.0])
+    dens = math.exp(-0.5 * d @ np.linalg.solve(S, d)) / (2 * math.pi * math.sqrt(np.linalg.det(S)))
+    share = (dens / rho) / (1 + dens / rho)
+    assert ident.probability(7) == pytest.approx(share, rel=1e-12)
+    assert ident.target() == 7
+    ident.confirmed(8, 2.0, np.array([600.0, 0.0]), P, evidence=0.0)   # far away: almost certainly background
+    assert ident.probability(8) < 1e-6
+    assert ident.target() == 7
+
+
+def test_lost_target_moves_the_search_centre_and_is_reacquired_nearby():
+    ident = TargetIdentity(_config(background_density=1e-5, search_speed=5.0))
+    ident.cue(0.0, np.zeros(2), sigma_m=10.0)
+    ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    assert ident.target() == 1
+    ident.deleted(1, 10.0, np.array([100.0, 0.0]), np.array([10.0, 0.0]), np.eye(2) * 4.0)
+    assert ident.target() is None and ident.w_none == pytest.approx(1.0)
+    mean, S = ident.search_estimate(12.0)
+    np.testing.assert_allclose(mean, [120.0, 0.0])
+    np.testing.assert_allclose(S, np.eye(2) * (4.0 + 100.0))
+    ident.confirmed(2, 12.0, np.array([118.0, 3.0]), np.eye(2), evidence=0.0)
+    ident.confirmed(3, 12.0, np.array([-300.0, 0.0]), np.eye(2), evidence=0.0)
+    assert ident.target() == 2
+
+
+def test_teammates_evidence_is_applied_without_being_stored():
+    ident = TargetIdentity(_config(background_density=1e-3))
+    ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    ident.confirmed(2, 0.0, np.ones(2), np.eye(2), evidence=0.0)
+    before = dict(ident.weights)
+    p = ident.teammates({2: math.log(9.0)})
+    total = before[1] + 9.0 * before[2] + ident.w_none
+    assert p[2] == pytest.approx(9.0 * before[2] / total)
+    assert ident.weights == before
+
+
+def test_background_frequencies_count_with_one_pseudo_count():
+    f = background_frequencies([{"colour": 0}, {"colour": 0}, {"colour": 1}], {"colour": 3})
+    np.testing.assert_allclose(f["colour"], np.array([3, 2, 1]) / 6)
+
+
+def test_bad_config_is_refused():
+    with pytest.raises(ValueError, match="background_density"):
+        _config(background_density=0.0)
+    with pytest.raises(ValueError, match="sum"):
+        IdentityConfig(target_classes={}, background={"colour": np.array([0.5, 0.4])})

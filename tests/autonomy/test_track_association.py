@@ -1,0 +1,66 @@
+"""Team fusion among traffic: teammates' tracks are associated with one's own before fusing, and the team's target
+is chosen with the teammates' class evidence."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from autonomy.fusion.convex import state_vector_fusion
+from autonomy.fusion.track_association import TeamTrackFusion, associate_tracks
+from interfaces.state import TargetEstimate, TrackPicture, TrackReport
+
+CHI2_2_999 = -2.0 * math.log(1e-3)  # χ²₂ quantile at 0.999
+
+
+def _est(x, y, var=25.0, t=10.0) -> TargetEstimate:
+    P = np.diag([var, var, 4.0, 4.0])
+    return TargetEstimate(t=t, p_W=np.array([x, y]), v_W=np.zeros(2), P=P)
+
+
+def _rep(k, x, y, p=0.0, evidence=0.0, var=25.0) -> TrackReport:
+    return TrackReport(track_id=k, estimate=_est(x, y, var), target_probability=p, evidence=evidence)
+
+
+def test_association_pairs_the_same_cars_and_leaves_far_ones_alone():
+    own = [_est(0, 0), _est(100, 0), _est(300, 0)]
+    other = [_est(103, 4), _est(-2, 1), _est(900, 0)]
+    pairs = associate_tracks(own, other, CHI2_2_999)
+    assert sorted(pairs) == [(0, 1), (1, 0)]
+    # the gate: a difference d with P_a + P_b = 50 I is associated iff |d|²/50 <= χ²
+    edge = math.sqrt(CHI2_2_999 * 50.0)
+    assert associate_tracks([_est(0, 0)], [_est(edge * 0.99, 0)], CHI2_2_999) == [(0, 0)]
+    assert associate_tracks([_est(0, 0)], [_est(edge * 1.01, 0)], CHI2_2_999) == []
+
+
+def test_only_associated_tracks_fuse_into_the_target():
+    fusion = TeamTrackFusion("convex", max_age_s=2.0, q=0.0)
+    own = [_rep(1, 0, 0, p=0.9), _rep(2, 200, 0, p=0.05)]
+    mate = TrackPicture(t=10.0, tracks=(_rep(5, 204, 0, p=0.0), _rep(6, 3, 2, p=0.8)), target_track_id=6)
+    out = fusion.fuse(10.0, own[0].estimate, own, 1, [mate])
+    assert out.own_track_id == 1 and out.fused_with == 1
+    f = state_vector_fusion(np.r_[0.0, 0, 0, 0], own[0].estimate.P, np.r_[3.0, 2, 0, 0], mate.tracks[1].estimate.P)
+    np.testing.assert_allclose(out.estimate.p_W, f.x[:2])
+
+
+def test_teammates_evidence_moves_the_team_target():
+    """Own belief: track 1 at 0.45, track 2 at 0.35, none 0.2; a teammate's evidence log 4 on the car of track 2
+    makes the team's probabilities 0.45 : 1.4 : 0.2 (normalised), so track 2 is the target."""
+    fusion = TeamTrackFusion("covariance_intersection", max_age_s=2.0, q=0.0)
+    own = [_rep(1, 0, 0, p=0.45), _rep(2, 200, 0, p=0.35)]
+    mate = TrackPicture(t=10.0, tracks=(_rep(9, 201, 1, p=0.3, evidence=math.log(4.0)),), target_track_id=9)
+    out = fusion.fuse(10.0, own[0].estimate, own, 1, [mate])
+    assert out.own_track_id == 2
+    assert out.probability == pytest.approx(1.4 / (0.45 + 1.4 + 0.2))
+    assert fusion.disagreements == 1
+
+
+def test_stale_pictures_are_ignored_and_no_candidate_keeps_the_local_estimate():
+    fusion = TeamTrackFusion("convex", max_age_s=2.0, q=0.0)
+    own = [_rep(1, 0, 0, p=0.3)]
+    old = TrackPicture(t=5.0, tracks=(_rep(3, 1, 1, p=0.9, evidence=5.0),), target_track_id=3)
+    local = _est(50, 50)
+    out = fusion.fuse(10.0, local, own, None, [old])
+    assert out.estimate is local and out.fused_with == 0

@@ -9,7 +9,7 @@ order of the phases.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -117,16 +117,17 @@ def fake_assembly(*, clock: Clock, recorder: RunRecorder, uavs: ScriptedUavs, ua
                   agents: Sequence[AgentSlot], methods: Sequence[str], sensors: Sequence[SensorSlot] = (),
                   cars: ScriptedCars | None = None, car_ids: Sequence[str] = (), channel: Channel | None = None,
                   comms: CommsSection | None = None, outages: Sequence[Outage] = (), scene: SceneQuery | None = None,
-                  physics: FakePhysics | None = None, record_div: int = 1) -> Assembly:
+                  physics: FakePhysics | None = None, record_div: int = 1,
+                  car_attributes: Mapping[str, np.ndarray] | None = None) -> Assembly:
     """An :class:`~simulator.tick.Assembly` on scripted fleets: the team protocols are built from each agent's
     fusion method (``methods``) as in a run (:func:`simulator.prepare.build_teams`; HCMCI with its default
-    settings)."""
+    settings). ``car_attributes``: each car's class indices (:func:`simulator.truth.car_attributes`), or None."""
     query = scene if scene is not None else FakeScene()
     agents, teams = list(agents), build_teams(list(methods), list(agents), None)
     comm = team_comms(teams, agents, uav_ids=list(uav_ids), quads=uavs, channel=channel,
                       comms=comms or CommsSection(), outages=list(outages), scene_query=query)
     return Assembly(clock=clock, scene=physics if physics is not None else FakePhysics(),
-                    truth=Truth(uavs, cars, ("car",) * len(car_ids), None), comms=comm,
+                    truth=Truth(uavs, cars, ("car",) * len(car_ids), None, car_attributes), comms=comm,
                     recording=Recording(recorder, uav_ids, car_ids, None), teams=teams, scene_query=query,
                     uav_ids=list(uav_ids), car_ids=list(car_ids), target_index=0 if car_ids else None,
                     sensors=list(sensors), agents=agents, outages=list(outages), record_div=record_div)

@@ -37,7 +37,7 @@ from simulator.search_team import SearchTeamRun
 from simulator.seeding import RunSeeds
 from simulator.slots import AgentSlot, SensorSlot
 from simulator.tick import Assembly
-from simulator.truth import Truth
+from simulator.truth import Truth, car_attributes
 from worlds.build import WorldGeometry, build_geometry
 from worlds.errors import WorldError, WorldIssue
 from worlds.loader import LoadedWorld
@@ -209,7 +209,8 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     query = PybulletSceneQuery(scene.client, scene.occluders)
     outages = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     channel = build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query)
-    truth = Truth(quads, cars, car_kinds, decoys)
+    truth = Truth(quads, cars, car_kinds, decoys, car_attributes([g.type for g in world.ground_vehicles],
+                                                                 [g.colour for g in world.ground_vehicles]))
     _hand_off(world, prep.agents, cars, car_ids, seeds)
     teams = build_teams([u.autonomy.fusion.method for u in world.uavs], prep.agents, prep.hcmci)
     comms = team_comms(teams, prep.agents, uav_ids=uav_ids, quads=quads, channel=channel, comms=world.comms,

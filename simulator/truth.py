@@ -3,6 +3,7 @@ in for PyBullet's) and the ground truth read from them."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Protocol
 
 import numpy as np
@@ -13,8 +14,9 @@ from simulator.decoys import StaticDecoys
 from vehicles.car.fleet import CarState
 from interfaces.setpoints import FlightSetpoint
 from vehicles.quadrotor.state import FleetState
+from worlds.catalog import CAR_ATTRIBUTES, car_classes
 
-__all__ = ["Fleet", "GroundFleet", "Truth", "UavFleet", "yaw_of"]
+__all__ = ["Fleet", "GroundFleet", "Truth", "UavFleet", "car_attributes", "yaw_of"]
 
 
 class Fleet(Protocol):
@@ -58,14 +60,30 @@ class Truth:
         Each car's kind as the sensors see it (``car`` or ``decoy``).
     decoys : StaticDecoys | None
         Static decoys, rows after the cars.
+    car_attributes : Mapping[str, np.ndarray] | None
+        Each car's class index per attribute (``worlds.catalog.CAR_ATTRIBUTES``; :func:`car_attributes`), (N,) per
+        name; the targets' :attr:`~autonomy.sensing.scene.TargetTruth.attributes`, with -1 for the static decoys.
+        None: the targets carry no attributes.
     """
 
     def __init__(self, quads: UavFleet | None, cars: GroundFleet | None, car_kinds: tuple[str, ...],
-                 decoys: StaticDecoys | None) -> None:
+                 decoys: StaticDecoys | None, car_attributes: Mapping[str, np.ndarray] | None = None) -> None:
         self.quads = quads
         self.cars = cars
         self.car_kinds = car_kinds
         self.decoys = decoys
+        self.car_attributes = None
+        if car_attributes is not None:
+            attrs = {str(k): np.array(v, dtype=int).reshape(-1) for k, v in car_attributes.items()}
+            bad = {k: v.size for k, v in attrs.items() if v.size != len(car_kinds)}
+            if bad:
+                raise ValueError(f"Truth.car_attributes must have one entry per car ({len(car_kinds)}), got {bad}")
+            self.car_attributes = attrs
+
+    def _attributes(self, n_decoys: int) -> dict[str, np.ndarray] | None:
+        if self.car_attributes is None:
+            return None
+        return {k: np.concatenate([v, np.full(n_decoys, -1, dtype=int)]) for k, v in self.car_attributes.items()}
 
     def targets(self) -> TargetTruth:
         """The ground vehicles, then the static decoys (rows ``len(cars) + k``; cars' cone rows are unused)."""
@@ -77,19 +95,30 @@ class Truth:
             st = self.cars.state
             p, v, yaw, kinds, segs = st.p_W, st.v_W, np.asarray(st.yaw), self.car_kinds, np.asarray(self.cars.body_ids)
         if self.decoys is None:
-            return TargetTruth(ids=np.arange(len(kinds)), p_W=p, v_W=v, kind=kinds, yaw=yaw, seg_ids=segs)
+            return TargetTruth(ids=np.arange(len(kinds)), p_W=p, v_W=v, kind=kinds, yaw=yaw, seg_ids=segs,
+                               attributes=self._attributes(0))
         d, n = self.decoys, len(kinds)
         return TargetTruth(ids=np.arange(n + len(d)), p_W=np.vstack([p, d.p_W]),
                            v_W=np.vstack([v, np.zeros((len(d), 3))]), kind=(*kinds, *("decoy",) * len(d)),
                            yaw=np.concatenate([yaw, d.yaw]),
                            cone_axis_W=np.vstack([np.tile([0.0, 0.0, 1.0], (n, 1)), d.cone_axis_W]),
                            cone_half_angle=np.concatenate([np.full(n, np.pi), d.cone_half_angle]),
-                           seg_ids=np.concatenate([segs, d.body_ids]))
+                           seg_ids=np.concatenate([segs, d.body_ids]), attributes=self._attributes(len(d)))
 
     def own_state(self, i: int, t: float) -> OwnState:
         """UAV ``i``'s navigation state at ``t`` (s): its true position, velocity and yaw."""
         st = self.quads.state
         return OwnState(t=t, p_W=st.p_W[i], v_W=st.v_W[i], yaw=yaw_of(st.q_WB[i]))
+
+
+def car_attributes(types: Sequence[str], colours: Sequence[str]) -> dict[str, np.ndarray]:
+    """(N,) class index of each car per attribute of ``worlds.catalog.CAR_ATTRIBUTES``, from each car's type and
+    colour (:func:`worlds.catalog.car_classes`)."""
+    if len(types) != len(colours):
+        raise ValueError(f"car_attributes needs one colour per car type, got {len(types)} types, {len(colours)} "
+                         "colours")
+    rows = [car_classes(t, c) for t, c in zip(types, colours, strict=True)]
+    return {name: np.array([r[name] for r in rows], dtype=int) for name in CAR_ATTRIBUTES}
 
 
 def yaw_of(q: np.ndarray) -> float:

@@ -7,7 +7,8 @@ name them instead, and ``tests/worlds/test_catalog.py`` fails when they differ f
 
 from __future__ import annotations
 
-__all__ = ["AIRFRAMES", "CAR_ATTRIBUTES", "CAR_COLOURS", "CAR_TYPES", "LENGTH_CLASSES", "car_classes"]
+__all__ = ["AIRFRAMES", "CAR_ATTRIBUTES", "CAR_COLOURS", "CAR_TYPES", "LENGTH_CLASSES", "LENGTH_SPLIT_M",
+           "car_classes"]
 
 CAR_TYPES: tuple[str, ...] = ("sedan", "van")
 """Car parameter files of ``vehicles/cars`` (``ground_vehicles[i].type``)."""
@@ -17,6 +18,9 @@ AIRFRAMES: tuple[str, ...] = ("crazyflie", "survey_quad")
 
 CAR_COLOURS: tuple[str, ...] = ("white", "black", "silver", "red", "blue", "green", "yellow")
 """Paint colours a car may have (``ground_vehicles[i].colour``): the classes of a camera's colour reading."""
+
+LENGTH_SPLIT_M = 5.2
+"""m: the car length at which the length class turns from ``short`` to ``long``."""
 
 LENGTH_CLASSES: tuple[str, ...] = ("short", "long")
 """Length classes a radar reads from a car's range profile: ``short`` under 5.2 m, ``long`` from 5.2 m."""

@@ -10,7 +10,7 @@ the physics rate, references between sections, UAVs starting inside the terrain)
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import ConfigDict, Field, field_validator, model_validator
 
@@ -18,14 +18,18 @@ from worlds.schema_autonomy import (AutonomySpec, EstimatorSpec, FormationSpec, 
                                     InfoPlanSpec, JacobiGainsSpec, SearchSpec, SetMembershipSpec)
 from worlds.schema_base import NonNegFloat, PositiveFloat, Strict, Vec2, Vec3
 
-from worlds.catalog import CAR_TYPES
+from worlds.catalog import CAR_ATTRIBUTES, CAR_COLOURS, CAR_TYPES
 
 __all__ = [
     "AutonomySpec",
     "BearingSpec",
     "BoxSpec",
+    "BodyReadSpec",
     "BuildingSpec",
+    "CameraClassifySpec",
     "CameraSpec",
+    "ClassReadSpec",
+    "ColourReadSpec",
     "CommsSection",
     "DecoySpec",
     "DriverSpec",
@@ -40,8 +44,10 @@ __all__ = [
     "InfoPlanSpec",
     "InitialPose",
     "JacobiGainsSpec",
+    "LengthReadSpec",
     "OsmSection",
     "OutageSpec",
+    "RadarClassifySpec",
     "RadarSpec",
     "RenderSection",
     "RoadsSection",
@@ -319,6 +325,9 @@ class DriverSpec(Strict):
 class GroundVehicleSpec(Strict):
     id: str
     type: str = Field("sedan", description=f"car parameter file name (vehicles/cars: {', '.join(CAR_TYPES)})")
+    colour: str = Field("white", description=f"paint colour, one of {', '.join(CAR_COLOURS)}: the class a camera's "
+                                             "colour reading (sensors[j].classify.colour) reads; the rendered body "
+                                             "keeps the colour the camera detector looks for")
     role: Literal["target", "decoy", "traffic"] = "target"
     route: RouteSpec
     driver: DriverSpec = Field(default_factory=DriverSpec,
@@ -336,6 +345,13 @@ class GroundVehicleSpec(Strict):
     def _known_car(cls, value: str) -> str:
         if value not in CAR_TYPES:
             raise ValueError(f"one of the car types of vehicles/cars ({', '.join(CAR_TYPES)})")
+        return value
+
+    @field_validator("colour")
+    @classmethod
+    def _known_colour(cls, value: str) -> str:
+        if value not in CAR_COLOURS:
+            raise ValueError(f"one of the car colours ({', '.join(CAR_COLOURS)})")
         return value
 
     @model_validator(mode="after")
@@ -368,6 +384,88 @@ class SensorBase(Strict):
     latency_s: NonNegFloat | None = None
 
 
+CONFUSION_ROW_TOL = 1e-6
+"""Largest accepted ``|sum of a confusion row - 1|`` (``autonomy.sensing.classify.ROW_SUM_TOL``)."""
+
+
+class ClassReadSpec(Strict):
+    """A sensor's reading of one class attribute (``autonomy.sensing.classify.Classifier``): give ``accuracy`` (the
+    true class with that probability, each wrong one with ``(1 - accuracy) / (K - 1)``) or the full ``confusion``
+    matrix, ``confusion[true][observed]``, K x K for the K classes of the attribute (``worlds.catalog``)."""
+
+    attribute: ClassVar[str]
+
+    accuracy: float | None = Field(None, description="probability of reporting the true class, in (1/K, 1] for "
+                                                      "the K classes of the attribute")
+    confusion: list[list[float]] | None = Field(None, description="K x K row-stochastic matrix, [true][observed]: "
+                                                                  "non-negative rows that sum to 1")
+
+    @classmethod
+    def n_classes(cls) -> int:
+        return len(CAR_ATTRIBUTES[cls.attribute])
+
+    @field_validator("accuracy")
+    @classmethod
+    def _better_than_a_guess(cls, value: float | None) -> float | None:
+        k = cls.n_classes()
+        if value is not None and not (1.0 / k < value <= 1.0):
+            raise ValueError(f"an accuracy in (1/{k}, 1] (better than a guess among the {k} classes of "
+                             f"{cls.attribute}: {', '.join(CAR_ATTRIBUTES[cls.attribute])})")
+        return value
+
+    @field_validator("confusion")
+    @classmethod
+    def _row_stochastic(cls, value: list[list[float]] | None) -> list[list[float]] | None:
+        if value is None:
+            return value
+        k = cls.n_classes()
+        classes = ", ".join(CAR_ATTRIBUTES[cls.attribute])
+        if len(value) != k or any(len(row) != k for row in value):
+            raise ValueError(f"a {k} x {k} matrix, one row and one column per class of {cls.attribute} ({classes}), "
+                             f"got {len(value)} rows of lengths {[len(row) for row in value]}")
+        for i, row in enumerate(value):
+            if any(c < 0 for c in row) or abs(sum(row) - 1.0) > CONFUSION_ROW_TOL:
+                raise ValueError(f"rows of non-negative entries that sum to 1 (row {i} sums to {sum(row):.9g})")
+        return value
+
+    @model_validator(mode="after")
+    def _one_of(self) -> ClassReadSpec:
+        if (self.accuracy is None) == (self.confusion is None):
+            raise ValueError("exactly one of accuracy and confusion")
+        return self
+
+
+class LengthReadSpec(ClassReadSpec):
+    """A radar's reading of the length class from the range profile (classes ``worlds.catalog.LENGTH_CLASSES``)."""
+
+    attribute: ClassVar[str] = "length"
+
+
+class ColourReadSpec(ClassReadSpec):
+    """A camera's reading of the paint colour (classes ``worlds.catalog.CAR_COLOURS``)."""
+
+    attribute: ClassVar[str] = "colour"
+
+
+class BodyReadSpec(ClassReadSpec):
+    """A camera's reading of the body type (classes ``worlds.catalog.CAR_TYPES``)."""
+
+    attribute: ClassVar[str] = "body"
+
+
+class RadarClassifySpec(Strict):
+    """The class readings a radar attaches to its detections (``RadarConfig.classify``)."""
+
+    length: LengthReadSpec | None = None
+
+
+class CameraClassifySpec(Strict):
+    """The class readings a camera attaches to its detections (``CameraConfig.classify``)."""
+
+    colour: ColourReadSpec | None = None
+    body: BodyReadSpec | None = None
+
+
 class RadarSpec(SensorBase):
     """GMTI radar (``autonomy.sensing.radar.RadarConfig``)."""
 
@@ -384,6 +482,8 @@ class RadarSpec(SensorBase):
     min_detectable_velocity: NonNegFloat | None = Field(None, description="GMTI Doppler notch, m/s")
     clutter_rate: NonNegFloat | None = Field(None, description="mean false alarms per scan")
     clutter_range_rate_max: NonNegFloat | None = Field(None, description="m/s")
+    classify: RadarClassifySpec | None = Field(None, description="class readings of each detection (off when "
+                                                                 "left out): length")
 
 
 class CameraSpec(SensorBase):
@@ -399,6 +499,8 @@ class CameraSpec(SensorBase):
     near: PositiveFloat | None = None
     far: PositiveFloat | None = None
     min_blob_area_px: int | None = Field(None, gt=0)
+    classify: CameraClassifySpec | None = Field(None, description="class readings of each detection (off when "
+                                                                  "left out): colour, body")
 
 
 class BearingSpec(SensorBase):

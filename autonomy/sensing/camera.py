@@ -17,21 +17,33 @@ Two cars whose blobs touch in the image give one detection.
 
 Gimbal: the camera frame is ``R_WC = R_z(yaw) R_y(pitch)`` when stabilised (it follows the heading only) or
 ``R_WC = R_WB R_y(pitch)`` when fixed to the airframe; positive ``gimbal_pitch`` looks down.
+
+With ``classify`` (:class:`~autonomy.sensing.classify.Classifier` of ``"colour"`` and / or ``"body"``), every
+detection also carries the camera's readings of the car's paint colour and body type (``Detection.classes``) of
+the target the blob came from (a blob of no target, or of a static decoy, reads uniform classes). The detector
+itself stays the colour-keyed blob finder above (every car is rendered in :data:`CAR_RGBA`): the readings are
+simulated from the target's true classes through the confusion matrix, drawn from the generator
+:func:`~autonomy.sensing.classify.class_generator` spawns from the frame's, so the centroid noise of this and every
+later frame is the same with classification on or off.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from autonomy.estimation.measurements import BearingDetectionModel
 
+from .classify import Classifier, check_classifiers, class_generator, read_classes
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation
 from .scene import CameraIntrinsics, CameraPose, RenderedImage, SceneQuery, SensorPose, TargetTruth, yaw_rot
 
-__all__ = ["CAR_RGBA", "Blob", "Camera", "CameraConfig", "camera_pose", "detect_blobs"]
+__all__ = ["CAMERA_ATTRIBUTES", "CAR_RGBA", "Blob", "Camera", "CameraConfig", "camera_pose", "detect_blobs"]
+
+CAMERA_ATTRIBUTES: tuple[str, ...] = ("colour", "body")
+"""The class attributes a camera may read: the paint colour and the body type."""
 
 CAR_RGBA: tuple[float, float, float, float] = (1.0, 0.0, 1.0, 1.0)
 """Colour of every car body in the simulator (RGBA in [0, 1]): saturated magenta, OpenCV hue 150."""
@@ -74,6 +86,9 @@ class CameraConfig:
         Delay from exposure to arrival (s).
     keep_frame : bool
         Put the rendered frame in ``SensorOutput.extras["frame"]`` (for video and debugging).
+    classify : tuple[Classifier, ...]
+        Class readings attached to every detection (attributes of :data:`CAMERA_ATTRIBUTES`); empty: none, and no
+        random number is drawn for them.
     """
 
     width: int = 160
@@ -92,8 +107,10 @@ class CameraConfig:
     min_blob_area_px: int = 2
     latency_s: float = 0.0
     keep_frame: bool = False
+    classify: tuple[Classifier, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "classify", check_classifiers("CameraConfig", self.classify, CAMERA_ATTRIBUTES))
         if self.width < 1 or self.height < 1:
             raise ValueError(f"CameraConfig size must be >= 1 px, got {self.width}x{self.height}")
         if not (0 < self.hfov < np.pi):
@@ -248,5 +265,8 @@ class Camera(Sensor):
                 )
             )
             ids.append(self._associate(blob, frame, cam, targets))
+        if cfg.classify and dets:
+            readings = read_classes(cfg.classify, ids, targets, class_generator(rng))
+            dets = [replace(d, classes=c) for d, c in zip(dets, readings, strict=True)]
         extras = {"frame": frame, "camera_pose": cam} if cfg.keep_frame else {}
         return SensorOutput(detections=tuple(dets), truth_ids=np.asarray(ids, dtype=int), extras=extras)

@@ -16,6 +16,11 @@ so ``P_d(r_ref) = pd_ref``, ``P_d -> 1`` as ``r -> 0`` and ``P_d -> P_fa`` far a
 false-alarm probability of that law only; false alarms are drawn separately: a Poisson number with mean
 ``clutter_rate`` per scan, uniform on the ground inside the field of regard and range, each with a range rate
 uniform in ``min_detectable_velocity <= |r_dot| <= clutter_range_rate_max``.
+
+With ``classify`` (a :class:`~autonomy.sensing.classify.Classifier` of ``"length"``), every detection also carries
+the radar's reading of the car's length class from its range profile (``Detection.classes``), drawn from the
+generator :func:`~autonomy.sensing.classify.class_generator` spawns from the scan's, so the other draws of a scan
+(and of every later scan) are the same with classification on or off.
 """
 
 from __future__ import annotations
@@ -26,11 +31,15 @@ import numpy as np
 
 from autonomy.estimation.measurements import RadarDetectionModel
 
+from .classify import Classifier, check_classifiers, class_generator, read_classes
 from .fov import FieldOfRegard
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation, wrap_angle
 from .scene import SceneQuery, SensorPose, TargetTruth
 
-__all__ = ["Radar", "RadarConfig", "swerling1_pd"]
+__all__ = ["RADAR_ATTRIBUTES", "Radar", "RadarConfig", "swerling1_pd"]
+
+RADAR_ATTRIBUTES: tuple[str, ...] = ("length",)
+"""The class attributes a radar may read: the length class, from the target's range profile."""
 
 
 def swerling1_pd(r: np.ndarray, pd_ref: float, range_ref: float, pfa: float) -> np.ndarray:
@@ -78,6 +87,9 @@ class RadarConfig:
         Ground height on which false alarms are spread (m).
     latency_s : float
         Delay from measurement to arrival (s).
+    classify : tuple[Classifier, ...]
+        Class readings attached to every detection (attributes of :data:`RADAR_ATTRIBUTES`); empty: none, and no
+        random number is drawn for them.
     """
 
     sigma_range: float
@@ -95,8 +107,10 @@ class RadarConfig:
     clutter_range_rate_max: float = 30.0
     ground_z: float = 0.0
     latency_s: float = 0.0
+    classify: tuple[Classifier, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "classify", check_classifiers("RadarConfig", self.classify, RADAR_ATTRIBUTES))
         for name in ("sigma_range", "sigma_azimuth", "rate_hz", "max_range", "range_ref"):
             if not (getattr(self, name) > 0):
                 raise ValueError(f"RadarConfig.{name} must be > 0, got {getattr(self, name)}")
@@ -208,6 +222,9 @@ class Radar(Sensor):
         if n:
             z[:, 1] = wrap_angle(z[:, 1])
         order = rng.permutation(n)
+        truth_ids = np.asarray(ids, dtype=int)[order] if n else np.zeros(0, int)
+        classes = read_classes(cfg.classify, truth_ids, targets, class_generator(rng)) if cfg.classify and n \
+            else [()] * n
         t_arr = tick_time_s + cfg.latency_s
         dets = tuple(
             Detection(
@@ -218,7 +235,8 @@ class Radar(Sensor):
                 sensor_id=self.sensor_id,
                 p_sensor_W=pose.p_W,
                 model=self.model,
+                classes=classes[k],
             )
-            for i in order
+            for k, i in enumerate(order)
         )
-        return SensorOutput(detections=dets, truth_ids=np.asarray(ids, dtype=int)[order] if n else np.zeros(0, int))
+        return SensorOutput(detections=dets, truth_ids=truth_ids)

@@ -41,7 +41,7 @@ def tracking_mode(world: World, uav: UavSpec) -> str:
 
 
 def _classes(g: GroundVehicleSpec) -> dict[str, int]:
-    return car_classes(g.type, getattr(g, "colour", "white"))
+    return car_classes(g.type, g.colour)
 
 
 def identity_config(world: World, uav: UavSpec) -> IdentityConfig:

@@ -1,0 +1,145 @@
+"""The multi-target tracker: M-of-N confirmation follows the binomial law, crossing cars keep their tracks, the
+target track is kept by identity among look-alike traffic, and the single-target estimator wrapper sees only the
+target's detections."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+
+from autonomy.estimation.tracker import TrackerConfig
+from autonomy.estimation.tracking.gated import TargetGatedEstimator
+from autonomy.estimation.tracking.identity import IdentityConfig
+from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerConfig
+from autonomy.sensing.measurement import ClassMeasurement, Detection
+
+SIGMA = 2.0  # m, position detections
+BG = {"colour": np.array([0.5, 0.5])}
+CONF = np.array([[0.9, 0.1], [0.1, 0.9]])
+
+
+def _det(xy, t, colour=None, sensor="s") -> Detection:
+    classes = () if colour is None else (ClassMeasurement(attribute="colour", observed=colour, confusion=CONF),)
+    return Detection(z=np.asarray(xy, float), R=np.eye(2) * SIGMA**2, t_meas=t, t_arrival=t, sensor_id=sensor,
+                     p_sensor_W=np.array([0.0, 0.0, 100.0]), kind="box", classes=classes)
+
+
+def _tracker(m=3, n=5, associator="gnn", **identity) -> MultiTargetTracker:
+    cfg = TrackerConfig(filter="ekf", model="cv", q=0.5, max_target_speed=30.0, lost_after_s=3.0)
+    ident = IdentityConfig(target_classes={"colour": 1}, background=BG,
+                           **({"background_density": 1e-5} | identity))
+    return MultiTargetTracker(cfg, MultiTrackerConfig(associator=associator, confirm_m=m, confirm_n=n), ident)
+
+
+@pytest.mark.parametrize("m,n,pd", [(3, 5, 0.6), (4, 6, 0.7)])
+def test_m_of_n_confirmation_follows_the_binomial_law(m, n, pd):
+    """A tentative track starts with 2 hits in 2 scans; it is confirmed iff at least m−2 of the next n−2 scans
+    detect it: P = P(Binom(n−2, pd) >= m−2). Scans are made visible by one far false alarm each."""
+    rng = np.random.default_rng(11)
+    runs, confirmed = 400, 0
+    for _ in range(runs):
+        tr = _tracker(m, n)
+        car = np.array([0.0, 0.0])
+        for k in range(40):
+            t = 0.5 * k
+            scan = [_det(rng.uniform(5e4, 9e4, 2) * rng.choice([-1, 1], 2), t)]
+            if k < 2 or rng.uniform() < pd:
+                scan.append(_det(car + rng.normal(0, SIGMA, 2), t))
+            tr.step(t, scan)
+            first = [x for x in tr.tracks if np.linalg.norm(x.filter.x[[0, 1]]) < 50]
+            if tr.confirmations or (k >= 2 and not first):
+                break
+        confirmed += tr.confirmations > 0
+    p = binom.sf(m - 3, n - 2, pd)
+    lo, hi = binom.ppf(0.0005, runs, p), binom.ppf(0.9995, runs, p)
+    assert lo <= confirmed <= hi, (confirmed, runs * p)
+
+
+def test_two_crossing_cars_keep_their_tracks_under_gnn():
+    """Two cars on straight lines crossing at 30° (the linear-Gaussian case): each ends on the track it started
+    with, on (almost) every seed."""
+    swaps, seeds = 0, 40
+    for seed in range(seeds):
+        rng = np.random.default_rng(seed)
+        tr = _tracker()
+        v1 = 10.0 * np.array([1.0, 0.0])
+        v2 = 10.0 * np.array([np.cos(np.radians(30)), np.sin(np.radians(30))])
+        p1, p2 = np.array([-100.0, 0.0]), -10.0 * v2
+        ids_at_start = None
+        for k in range(41):
+            t = 0.5 * k
+            a, b = p1 + v1 * t, p2 + v2 * t
+            tr.step(t, [_det(a + rng.normal(0, SIGMA, 2), t), _det(b + rng.normal(0, SIGMA, 2), t)])
+            if k == 8:
+                ids_at_start = _nearest_ids(tr, a, b)
+        assert ids_at_start is not None and None not in ids_at_start
+        swaps += _nearest_ids(tr, a, b) != ids_at_start
+    assert swaps <= 2, swaps
+
+
+def _nearest_ids(tr, a, b):
+    out = []
+    for car in (a, b):
+        best = min(tr.tracks, key=lambda x: np.linalg.norm(x.filter.x[[0, 1]] - car), default=None)
+        out.append(None if best is None or np.linalg.norm(best.filter.x[[0, 1]] - car) > 15 else best.track_id)
+    return out
+
+
+def test_target_is_found_among_traffic_by_colour_and_held():
+    """Five cars in a row 60 m apart, one of the target's colour; no cue. The colour readings make its track the
+    target's within a few scans, and it stays so."""
+    rng = np.random.default_rng(3)
+    tr = _tracker()
+    cars = np.array([[60.0 * k, 0.0] for k in range(5)])
+    colours = [0, 0, 1, 0, 0]
+    on_target = []
+    for k in range(40):
+        t = 0.5 * k
+        pos = cars + np.array([8.0 * t, 0.0])
+        scan = [_det(p + rng.normal(0, SIGMA, 2), t, colour=int(rng.uniform() < CONF[c, 1]))
+                for p, c in zip(pos, colours, strict=True)]
+        est = tr.step(t, scan)
+        if k >= 12:
+            on_target.append(est is not None and np.linalg.norm(est.p_W - pos[2]) < 10)
+    assert np.mean(on_target) == 1.0
+    assert tr.identity.probability(tr.target_track_id) > 0.99
+
+
+def test_cue_designates_the_target_without_class_readings():
+    rng = np.random.default_rng(4)
+    tr = _tracker()
+    cars = np.array([[0.0, 0.0], [200.0, 0.0], [400.0, 0.0]])
+    tr.cue(0.0, cars[1] + rng.normal(0, 20, 2), sigma_m=20.0)
+    for k in range(20):
+        t = 0.5 * k
+        pos = cars + np.array([0.0, 5.0 * t])
+        est = tr.step(t, [_det(p + rng.normal(0, SIGMA, 2), t) for p in pos])
+    assert np.linalg.norm(est.p_W - pos[1]) < 10
+    # before any track, the estimate is the cue (guidance flies there)
+    fresh = _tracker()
+    fresh.cue(0.0, np.array([5.0, 6.0]), sigma_m=20.0)
+    est0 = fresh.step(0.0, [])
+    np.testing.assert_allclose(est0.p_W, [5.0, 6.0])
+
+
+def test_gated_estimator_sees_only_the_target_tracks_detections():
+    class Recorder:
+        def __init__(self):
+            self.seen = []
+
+        def step(self, t, detections):
+            self.seen.extend(detections)
+            return None
+
+    rng = np.random.default_rng(5)
+    inner = Recorder()
+    est = TargetGatedEstimator(inner, _tracker())
+    cars = np.array([[0.0, 0.0], [300.0, 0.0]])
+    est.cue(0.0, cars[0], sigma_m=10.0)
+    for k in range(20):
+        t = 0.5 * k
+        est.step(t, [_det(p + rng.normal(0, SIGMA, 2), t) for p in cars])
+    assert inner.seen, "the target's detections reach the wrapped estimator"
+    assert all(np.linalg.norm(d.z - cars[0]) < 20 for d in inner.seen)
+    assert est.target_track_id is not None and est.track_reports()

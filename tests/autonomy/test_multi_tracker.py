@@ -47,7 +47,7 @@ def test_m_of_n_confirmation_follows_the_binomial_law(m, n, pd):
             if k < 2 or rng.uniform() < pd:
                 scan.append(_det(car + rng.normal(0, SIGMA, 2), t))
             tr.step(t, scan)
-            first = [x for x in tr.tracks if np.linalg.norm(x.filter.x[[0, 1]]) < 50]
+            first = [x for x in tr.tracks if np.linalg.norm(x.filter.x[[0, 2]]) < 50]
             if tr.confirmations or (k >= 2 and not first):
                 break
         confirmed += tr.confirmations > 0
@@ -81,8 +81,8 @@ def test_two_crossing_cars_keep_their_tracks_under_gnn():
 def _nearest_ids(tr, a, b):
     out = []
     for car in (a, b):
-        best = min(tr.tracks, key=lambda x: np.linalg.norm(x.filter.x[[0, 1]] - car), default=None)
-        out.append(None if best is None or np.linalg.norm(best.filter.x[[0, 1]] - car) > 15 else best.track_id)
+        best = min(tr.tracks, key=lambda x: np.linalg.norm(x.filter.x[[0, 2]] - car), default=None)
+        out.append(None if best is None or np.linalg.norm(best.filter.x[[0, 2]] - car) > 15 else best.track_id)
     return out
 
 

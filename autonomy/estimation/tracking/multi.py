@@ -207,7 +207,7 @@ class MultiTargetTracker:
         live = [tr for tr in self.tracks if tr.filter.t <= t_meas]
         fixing = self.fixer.fixes_position(scan)
         result = self.associator.assign(live, scan)
-        self.gated_out += result.gated_out
+        self.gated_out += len(result.gated_out)
         hit: set[int] = set()
         if result.weights is None:
             for i, j in result.pairs:
@@ -341,13 +341,13 @@ class MultiTargetTracker:
 def _associator(multi: MultiTrackerConfig, gate, model: MotionModel, target_height: float, gating_filter):
     """The configured associator of a scan's detections to many tracks."""
     from .assignment import GlobalNearestNeighbourAssociator
+    from .gate import PredictedNis
     from .jpda import JointProbabilisticAssociator
 
+    distance = PredictedNis(model, target_height, gating_filter)
     if multi.associator == "gnn":
-        return GlobalNearestNeighbourAssociator(gate, model=model, target_height=target_height,
-                                                gating_filter=gating_filter)
-    return JointProbabilisticAssociator(gate, model=model, target_height=target_height, gating_filter=gating_filter,
-                                        detection_probability=multi.detection_probability,
+        return GlobalNearestNeighbourAssociator(gate, distance)
+    return JointProbabilisticAssociator(gate, distance, detection_probability=multi.detection_probability,
                                         clutter_density=multi.clutter_density)
 
 

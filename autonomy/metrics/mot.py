@@ -7,8 +7,8 @@ than ``match_radius_m`` can never match. From it (py-motmetrics, Heindl et al.; 
 - MOTA (Bernardin & Stiefelhagen 2008) :math:`= 1 - (\\mathrm{FN} + \\mathrm{FP} + \\mathrm{IDSW}) / \\mathrm{GT}`
   over all steps, GT the number of (step, vehicle) truth instances;
 - MOTP: the mean distance of the matched pairs (m; lower is better);
-- IDF1 (Ristani et al. 2016) :math:`= 2\\,\\mathrm{IDTP} / (2\\,\\mathrm{IDTP} + \\mathrm{IDFP} + \\mathrm{IDFN})`, from the
-  one-to-one assignment of whole track trajectories to whole truth trajectories;
+- IDF1 (Ristani et al. 2016) :math:`= 2\\,\\mathrm{IDTP} / (2\\,\\mathrm{IDTP} + \\mathrm{IDFP} + \\mathrm{IDFN})`,
+  from the one-to-one assignment of whole track trajectories to whole truth trajectories;
 - ID switches: steps at which a vehicle is matched to another track than the one it was last matched to
   (motmetrics keeps a previous pair whenever it is still within the radius, so a switch needs the old pair broken);
 - mostly tracked / mostly lost: vehicles matched in at least 80 % / under 20 % of the steps they exist;

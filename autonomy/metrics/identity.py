@@ -23,7 +23,7 @@ import numpy as np
 
 from autonomy.metrics.mot import DEFAULT_MATCH_RADIUS_M, check_match_radius
 
-__all__ = ["IdentitySummary", "cars_on", "identity_metrics"]
+__all__ = ["IdentitySummary", "cars_on", "identity_from_cars_on", "identity_metrics"]
 
 _NONE = -1
 
@@ -125,11 +125,15 @@ def identity_metrics(t: np.ndarray, estimates: Sequence[np.ndarray | None], trut
     for k, e in enumerate(estimates):
         if e is not None:
             est[k] = np.asarray(e, dtype=float).reshape(-1)[:2]
-    on = cars_on(est, truth, match_radius_m)
-    return _summarise(t, on, int(target))
+    return identity_from_cars_on(t, cars_on(est, truth, match_radius_m), int(target))
 
 
-def _summarise(t: np.ndarray, on: np.ndarray, target: int) -> IdentitySummary:
+def identity_from_cars_on(t: np.ndarray, on: np.ndarray, target: int) -> IdentitySummary:
+    """Identity metrics from the (T,) index of the car the estimate is on at each step (−1 for none; :func:`cars_on`)
+    at the (T,) increasing times ``t`` (s), for the designated car ``target``."""
+    t, on = np.asarray(t, dtype=float).reshape(-1), np.asarray(on, dtype=np.int64).reshape(-1)
+    if on.size != t.size:
+        raise ValueError(f"on must have one entry per step ({t.size}), got {on.size}")
     n = t.size
     nan = float("nan")
     if n == 0:

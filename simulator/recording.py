@@ -10,9 +10,9 @@ import numpy as np
 import pybullet as p
 
 from autonomy.agent import AgentOutput, TargetEstimator
-from autonomy.diagnostics import CountsSensorUse, HoldsRoad
+from autonomy.diagnostics import CountsSensorUse, HoldsRoad, HoldsTracks
 from interfaces.setpoints import UnicycleSetpoint, VelocitySetpoint
-from interfaces.state import TargetEstimate
+from interfaces.state import TargetEstimate, TrackReport
 from autonomy.sensing.measurement import SensorOutput
 from simulator.comms import Outage
 from simulator.record import RunRecorder
@@ -20,9 +20,9 @@ from simulator.scene import Scene
 from simulator.streams import STREAMS
 from simulator.truth import GroundFleet, UavFleet
 
-__all__ = ["ContactSource", "PybulletContacts", "Recording", "estimate_row"]
+__all__ = ["ContactSource", "PybulletContacts", "Recording", "estimate_row", "track_row"]
 
-_ESTIMATES, _COMMANDS = STREAMS["estimates"], STREAMS["commands"]
+_ESTIMATES, _COMMANDS, _TRACKS = STREAMS["estimates"], STREAMS["commands"], STREAMS["tracks"]
 
 
 class ContactSource(Protocol):
@@ -128,6 +128,15 @@ class Recording:
             cmd.update(vx=sp.v_W[0], vy=sp.v_W[1], vz=sp.v_W[2])
         self.recorder.append("commands", **cmd)
 
+    def tracks(self, tick: int, t: float, uav: int, estimator: TargetEstimator) -> None:
+        """One ``tracks`` row per live track of a multi-target estimator (:class:`~autonomy.diagnostics.HoldsTracks`)
+        after its step; nothing for other estimators."""
+        if not isinstance(estimator, HoldsTracks):
+            return
+        target = estimator.target_track_id
+        for rep in estimator.track_reports():
+            self.recorder.append("tracks", **track_row(tick, t, uav, rep, rep.track_id == target))
+
     def sharing(self, tick: int, t: float, uav: int, estimator: TargetEstimator, received: int,
                 own_sensors: set[str]) -> None:
         """``measurement_sharing``: per agent step, the teammates' detections delivered to UAV ``uav`` so far
@@ -174,4 +183,15 @@ def estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used
         if est.P is not None:
             n = est.p_W.size
             row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1], pvxvx=est.P[n, n], pvyvy=est.P[n + 1, n + 1])
+    return row
+
+
+def track_row(tick: int, t: float, uav: int, rep: TrackReport, is_target: bool) -> dict:
+    """One row of ``tracks``: the track ``rep`` of UAV ``uav`` and whether the UAV takes it for the target."""
+    est = rep.estimate
+    row = _TRACKS.blank(tick=tick, t=t, uav=uav, track=int(rep.track_id), x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0],
+                        vy=est.v_W[1], p_target=float(rep.target_probability), evidence=float(rep.evidence),
+                        confirmed=bool(rep.confirmed), is_target=bool(is_target))
+    if est.P is not None:
+        row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1])
     return row

@@ -15,7 +15,15 @@
 - ``targets.<vehicle id>.<uav id>``: position and velocity error of that UAV's own estimate against truth — mean
   Euclidean error and RMSE (m, m/s) over the agent steps with an estimate — and the fraction of steps with an estimate;
   ``<uav id>_fused`` the same for the estimate fused with the teammates' (when the UAV fuses; under HCMCI the UAV's
-  own estimate is its consensus posterior);
+  own estimate is its consensus posterior); with each, over the same steps and against every ground vehicle, the
+  identity metrics of :mod:`autonomy.metrics.identity` (the estimate is on the nearest vehicle within the match
+  radius): ``identity_fraction`` (steps on the designated target), ``id_switches``, ``time_to_acquire_s``,
+  ``losses``, ``time_to_reacquire_mean_s`` / ``_max_s`` and ``unrecovered_losses``;
+- ``uavs.<id>.mot`` (UAVs whose estimator holds several tracks, :class:`autonomy.diagnostics.HoldsTracks`): the
+  UAV's confirmed tracks at its agent steps against every ground vehicle (:mod:`autonomy.metrics.mot`): ``mota``,
+  ``motp_m``, ``idf1``, ``num_switches``, ``mostly_tracked``, ``mostly_lost``, ``false_positives``, ``misses``,
+  ``truth_instances``, ``matches``, ``gospa_mean_m``, with the ``steps`` scored and the ``match_radius_m``. A partial
+  record may hold these from fewer steps than its other metrics (they are rescored as the steps grow by a quarter);
 - ``base_station`` (UAVs fusing at a base station, paper 001): base steps, packets sent / delivered / lost / late /
   fused and the delivery ratio; per fusing UAV (``uavs.<id>``) the mean route probability β, mean hop count, packets
   sent and delivered, delivery ratio and the steps at which it relayed for another UAV; and the base's own estimate
@@ -31,7 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.diagnostics import KeepsSolverStats, SolverSummary
+from autonomy.diagnostics import HoldsTracks, KeepsSolverStats, SolverSummary
+from autonomy.metrics.identity import cars_on, identity_from_cars_on
+from autonomy.metrics.mot import DEFAULT_MATCH_RADIUS_M, ClearMot, check_match_radius
 from interfaces.state import TargetEstimate
 from autonomy.team.base_station import BaseStationTeam
 from autonomy.team.hcmci import HcmciConsensusTeam
@@ -42,6 +52,10 @@ from simulator.slots import AgentSlot
 from simulator.tick import Assembly
 
 __all__ = ["MetricsTracker"]
+
+_MOT_RESCORE = 1.25
+"""Partial metrics rescore a tracker's MOT block once its steps have grown by this factor (scoring is linear in the
+steps, so a run's partial flushes cost a bounded multiple of its final scoring)."""
 
 
 class _Errors:
@@ -59,12 +73,42 @@ class _Errors:
         return out
 
 
+class _Identity:
+    """The steps of one estimate: times and the car it is on, the newest steps kept raw until scored."""
+
+    def __init__(self) -> None:
+        self.t: list[float] = []
+        self.on: list[int] = []
+        self.pending: list[tuple[float, np.ndarray | None, np.ndarray]] = []  # (t, xy or None, all vehicles' xy)
+
+    def add(self, t: float, est: TargetEstimate | None, truth_xy: np.ndarray) -> None:
+        self.pending.append((t, None if est is None else est.p_W[:2], truth_xy))
+
+    def summary(self, target: int, match_radius_m: float) -> dict[str, Any]:
+        if self.pending:
+            est = np.array([np.full(2, np.nan) if e is None else e for _, e, _ in self.pending])
+            truth = np.stack([x for _, _, x in self.pending])
+            self.on.extend(cars_on(est, truth, match_radius_m).tolist())
+            self.t.extend(t for t, _, _ in self.pending)
+            self.pending = []
+        if not self.t:
+            return {}
+        out = identity_from_cars_on(np.asarray(self.t), np.asarray(self.on), target).as_dict()
+        out.pop("steps")
+        return out
+
+
 class MetricsTracker:
     """Accumulates per-UAV and per-target metrics from an :class:`~simulator.tick.Assembly` tick by tick."""
 
-    def __init__(self, seed: int, physics_hz: int) -> None:
+    def __init__(self, seed: int, physics_hz: int, match_radius_m: float = DEFAULT_MATCH_RADIUS_M) -> None:
         self.seed = seed
         self.physics_hz = physics_hz
+        self.match_radius_m = check_match_radius(match_radius_m)
+        self.identity: dict[int, _Identity] = defaultdict(_Identity)
+        self.fused_identity: dict[int, _Identity] = defaultdict(_Identity)
+        self.mot: dict[int, ClearMot] = {}
+        self._mot_scored: dict[int, tuple[int, dict[str, Any]]] = {}  # uav -> (steps scored, block)
         self.asm: Assembly | None = None
         self.errors: dict[int, _Errors] = defaultdict(_Errors)
         self.fused_errors: dict[int, _Errors] = defaultdict(_Errors)
@@ -78,6 +122,8 @@ class MetricsTracker:
     def attach(self, asm: Assembly) -> None:
         self.asm = asm
         self._every = math.gcd(asm.record_div, *(a.divisor for a in asm.agents))
+        self.mot = {a.uav: ClearMot(self.match_radius_m) for a in asm.agents
+                    if isinstance(getattr(a.agent, "estimator", None), HoldsTracks)}
         n = len(asm.uav_ids)
         self.min_sep = np.full(n, np.inf)
         world = asm.world_spec
@@ -90,18 +136,26 @@ class MetricsTracker:
         if tick % self._every:  # no agent due and no record tick (most ticks)
             return
         due = [a.uav for a in asm.agents if tick % a.divisor == 0]
+        all_xy = asm.cars.state.p_W[:, :2].copy() if due and asm.cars is not None else None
+        if all_xy is not None and self.mot:
+            self._observe_tracks(tick, asm, due, all_xy)
         if due and asm.target_index is not None and asm.cars is not None:
             st = asm.cars.state
             k = asm.target_index
             p_true, v_true = st.p_W[k, :2], st.v_W[k, :2]
             slots = _slots_by_uav(asm)
+            t = tick / self.physics_hz
             for i in due:
                 team = asm.team_of(i)
                 if team is not None and not team.point_estimates:  # e.g. a searcher holds sets, not a point
                     continue
-                self._error(self.errors[i], asm.latest_local.get(i), p_true, v_true)
+                local = asm.latest_local.get(i)
+                self._error(self.errors[i], local, p_true, v_true)
+                self.identity[i].add(t, local, all_xy)
                 if slots[i].agent.fusion is not None:
-                    self._error(self.fused_errors[i], asm.latest_estimates.get(i), p_true, v_true)
+                    fused = asm.latest_estimates.get(i)
+                    self._error(self.fused_errors[i], fused, p_true, v_true)
+                    self.fused_identity[i].add(t, fused, all_xy)
             base = _base_station(asm)
             if base is not None and base.last_tick == tick:
                 self._error(self.base_errors, base.estimate, p_true, v_true)
@@ -120,6 +174,28 @@ class MetricsTracker:
             d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
             np.fill_diagonal(d, np.inf)
             self.min_sep = np.minimum(self.min_sep, d.min(axis=1))
+
+    def _observe_tracks(self, tick: int, asm: Assembly, due: list[int], all_xy: np.ndarray) -> None:
+        """The confirmed tracks of each due multi-target estimator against every ground vehicle."""
+        slots = _slots_by_uav(asm)
+        truth_ids = np.arange(len(all_xy))
+        for i in due:
+            if i not in self.mot:
+                continue
+            reports = [r for r in slots[i].agent.estimator.track_reports() if r.confirmed]
+            xy = np.array([r.estimate.p_W[:2] for r in reports]).reshape(-1, 2)
+            self.mot[i].add(tick / self.physics_hz, truth_ids, all_xy, [r.track_id for r in reports], xy)
+
+    def _mot_block(self, i: int, complete: bool) -> dict[str, Any] | None:
+        """UAV ``i``'s MOT scores; a partial call reuses the last ones until the steps grew by ``_MOT_RESCORE``."""
+        mot = self.mot.get(i)
+        if mot is None or mot.steps == 0:
+            return None
+        scored = self._mot_scored.get(i)
+        if scored is None or (scored[0] != mot.steps and (complete or mot.steps >= _MOT_RESCORE * scored[0])):
+            scored = (mot.steps, mot.summary().as_dict())
+            self._mot_scored[i] = scored
+        return dict(scored[1])
 
     @staticmethod
     def _error(err: _Errors, est: TargetEstimate | None, p_true: np.ndarray, v_true: np.ndarray) -> None:
@@ -169,6 +245,9 @@ class MetricsTracker:
             team = asm.team_of(i)
             if isinstance(team, HcmciConsensusTeam):
                 m["consensus_linked_steps"] = team.linked_steps.get(i, 0)
+            mot = self._mot_block(i, complete)
+            if mot is not None:
+                m["mot"] = mot
             uavs[uid] = m
         if self.phase_err:
             out["phase_error_mean_deg"] = float(np.mean(self.phase_err))
@@ -186,9 +265,12 @@ class MetricsTracker:
             out["comms"] = {"sent": cs.sent, "delivered": cs.delivered, "lost": cs.lost, "in_flight": cs.in_flight,
                             "delivery_ratio": cs.delivered / cs.sent if cs.sent else None}
         if asm.target_index is not None and self.errors:
-            tid = asm.car_ids[asm.target_index]
-            per_uav = {asm.uav_ids[i]: e.summary() for i, e in sorted(self.errors.items())}
-            per_uav.update({f"{asm.uav_ids[i]}_fused": e.summary() for i, e in sorted(self.fused_errors.items())})
+            k, r = asm.target_index, self.match_radius_m
+            tid = asm.car_ids[k]
+            per_uav = {asm.uav_ids[i]: {**e.summary(), **self.identity[i].summary(k, r)}
+                       for i, e in sorted(self.errors.items())}
+            per_uav.update({f"{asm.uav_ids[i]}_fused": {**e.summary(), **self.fused_identity[i].summary(k, r)}
+                            for i, e in sorted(self.fused_errors.items())})
             out["targets"] = {tid: per_uav}
         return _finite_or_none(out)
 

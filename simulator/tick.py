@@ -188,6 +188,7 @@ class Assembly:
             self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint
             self.recording.agent(tick, t, a.uav, a.agent.estimator, result, fused=a.agent.fusion is not None)
+            self.recording.tracks(tick, t, a.uav, a.agent.estimator)
             if a.uav in self._takers:
                 self.recording.sharing(tick, t, a.uav, a.agent.estimator, self.comms.shared_received.get(a.uav, 0),
                                        self._own_sensors[a.uav])

@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from autonomy.guidance.search.planner import SearchDecision
     from interfaces.state import TrackReport
 
-__all__ = ["CountsSensorUse", "DecidesSearch", "HoldsRoad", "HoldsTracks", "KeepsSolverStats", "PlansPath", "SolverSummary"]
+__all__ = ["CountsSensorUse", "DecidesSearch", "HoldsRoad", "HoldsTracks", "KeepsSolverStats", "PlansPath",
+           "SolverSummary"]
 
 
 @runtime_checkable

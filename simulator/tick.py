@@ -183,7 +183,8 @@ class Assembly:
             result = decide[a.uav](self.truth.own_state(a.uav, t), mates, shared)
             self.quads.set_command(a.uav, result.setpoint)
             self.comms.broadcast_state(a.uav, a.agent.guidance, t, tick)  # after planning: the plan starts here
-            self.comms.share_estimate(a.uav, result.local_estimate, t, tick, picture=track_picture(a.agent.estimator, t))
+            self.comms.share_estimate(a.uav, result.local_estimate, t, tick,
+                                      picture=track_picture(a.agent.estimator, t))
             self.latest_estimates[a.uav] = result.estimate
             self.latest_local[a.uav] = result.local_estimate
             self.latest_setpoints[a.uav] = result.setpoint

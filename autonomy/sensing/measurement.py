@@ -27,7 +27,8 @@ from autonomy.estimation.measurements import DetectionModel, attach_model
 
 from .scene import SceneQuery, SensorPose, TargetTruth
 
-__all__ = ["CLUTTER_ID", "ClassMeasurement", "Detection", "MeasurementKind", "Sensor", "SensorOutput", "azimuth_elevation", "wrap_angle"]
+__all__ = ["CLUTTER_ID", "ClassMeasurement", "Detection", "MeasurementKind", "Sensor",
+           "SensorOutput", "azimuth_elevation", "wrap_angle"]
 
 MeasurementKind = Literal["radar", "bearing", "camera", "box"]
 CLUTTER_ID = -1

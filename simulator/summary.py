@@ -41,7 +41,7 @@ import numpy as np
 
 from autonomy.diagnostics import HoldsTracks, KeepsSolverStats, SolverSummary
 from autonomy.metrics.identity import cars_on, identity_from_cars_on
-from autonomy.metrics.mot import DEFAULT_MATCH_RADIUS_M, ClearMot, check_match_radius
+from autonomy.metrics.mot import ClearMot, check_match_radius
 from interfaces.state import TargetEstimate
 from autonomy.team.base_station import BaseStationTeam
 from autonomy.team.hcmci import HcmciConsensusTeam
@@ -51,7 +51,12 @@ from simulator.search_team import SearchTeamRun
 from simulator.slots import AgentSlot
 from simulator.tick import Assembly
 
-__all__ = ["MetricsTracker"]
+__all__ = ["MetricsTracker", "RUN_MATCH_RADIUS_M"]
+
+RUN_MATCH_RADIUS_M = 50.0
+"""Distance (m) within which an estimate is on a car, for a run's identity and CLEAR-MOT metrics: about twice the
+range noise of the shipped GMTI radars (20-30 m), so that an estimate on the right car is not counted as lost for its
+noise, and about half the typical spacing of cars in the shipped towns (so a wrong car is not counted as right)."""
 
 _MOT_RESCORE = 1.25
 """Partial metrics rescore a tracker's MOT block once its steps have grown by this factor (scoring is linear in the
@@ -101,7 +106,7 @@ class _Identity:
 class MetricsTracker:
     """Accumulates per-UAV and per-target metrics from an :class:`~simulator.tick.Assembly` tick by tick."""
 
-    def __init__(self, seed: int, physics_hz: int, match_radius_m: float = DEFAULT_MATCH_RADIUS_M) -> None:
+    def __init__(self, seed: int, physics_hz: int, match_radius_m: float = RUN_MATCH_RADIUS_M) -> None:
         self.seed = seed
         self.physics_hz = physics_hz
         self.match_radius_m = check_match_radius(match_radius_m)

@@ -72,7 +72,7 @@ def _run(tmp_path, ticks: int = DIV * STEPS, partial_at: Sequence[int] = ()):
     recorder = RunRecorder(tmp_path, schemas=STREAMS)
     asm = fake_assembly(clock=Clock(physics_hz=HZ), recorder=recorder, uavs=uavs, uav_ids=["a", "b"], agents=agents,
                         methods=["none", "none"], cars=cars, car_ids=["c0", "c1"], record_div=DIV)
-    metrics = MetricsTracker(seed=0, physics_hz=HZ)
+    metrics = MetricsTracker(seed=0, physics_hz=HZ, match_radius_m=20.0)
     metrics.attach(asm)
     partial = {}
     for tick in range(1, ticks + 1):

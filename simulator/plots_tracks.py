@@ -55,7 +55,8 @@ def _rows(stream: dict[str, np.ndarray], uav: int) -> dict[str, np.ndarray]:
 
 
 def target_track_series(tracks: dict[str, np.ndarray], uav: int) -> TargetTrackSeries:
-    """UAV ``uav``'s :class:`TargetTrackSeries` from a ``tracks`` stream (columns of :data:`simulator.streams.STREAMS`)."""
+    """UAV ``uav``'s :class:`TargetTrackSeries` from a ``tracks`` stream (the columns of
+    :data:`simulator.streams.STREAMS`)."""
     d = _rows(tracks, uav)
     if d["tick"].size == 0:
         empty = np.zeros(0)

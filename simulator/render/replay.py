@@ -90,6 +90,9 @@ class Replayer:
         self.geometry = load_geometry(self.run_dir / "geometry.npz")
         self.uav_span = 2.0 * world.uav_arm_length() * cfg.uav_scale  # tip to tip, m
         self._sizes = [cfg.car_size or world.vehicle_size(v) for v in self.vehicle_index]
+        # other cars: those of role traffic (every car but the target when the world does not say)
+        self._traffic = [v for v in self.vehicle_index
+                         if v != self.target and world.vehicle_role(v) in ("traffic", None)]
         self._decoys = world.decoys()
         self.layout = self._layout()
         self.stage = self._choose_stage()
@@ -210,8 +213,7 @@ class Replayer:
             if got is not None:
                 marks.append(EstimateMark(u, UAV_COLORS[u % len(UAV_COLORS)], got[0], got[1], self.standoff.get(u)))
         trails = [(UAV_COLORS[u % len(UAV_COLORS)], tl.uavs[u].trail(t, cfg.trail_s)) for u in self.uav_index]
-        traffic = [v for v in self.vehicle_index if v != self.target]
-        traffic_W = np.array([tl.vehicles[v].at(t)[0] for v in traffic]) if traffic else None
+        traffic_W = np.array([tl.vehicles[v].at(t)[0] for v in self._traffic]) if self._traffic else None
         return OverlayFrame(target_W=p_t if self.target is not None else None, estimates=marks, trails=trails,
                             scans=tl.radar_scans(t),
                             scan_rgb={u: UAV_COLORS[u % len(UAV_COLORS)] for u in self.uav_index},

@@ -94,3 +94,14 @@ def test_replay_of_a_tracking_run_carries_tracks_traffic_and_the_target_track_in
         assert len(frames) == 2 and frames[1].rgb.shape == (120, 160, 3)
     finally:
         rep.close()
+
+
+def test_other_cars_bracketed_are_those_of_role_traffic():
+    from simulator.render.world_view import ReplayWorld
+    from worlds.loader import load_world
+
+    traffic = ReplayWorld(load_world("road_standoff_traffic").world)
+    assert traffic.vehicle_role(0) == "target" and traffic.vehicle_role(25) is None
+    assert {traffic.vehicle_role(v) for v in range(1, 25)} == {"traffic"}
+    two_targets = ReplayWorld(load_world("search_decoys").world)
+    assert [two_targets.vehicle_role(v) for v in (0, 1)] == ["target", "target"]  # no grey brackets there

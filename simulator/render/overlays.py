@@ -297,28 +297,36 @@ def _traffic_brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int
 
 def _draw_tracks(img: np.ndarray, view: CameraView, mark: TrackMark, z: float, s: int, row: int) -> None:
     """One UAV's tracks: a ring and the id per track; the target track filled, with its id and ``p_target``.
-    ``row`` shifts the labels of the UAV's tracks so that two UAVs' labels of one car do not overlap."""
+    ``row`` (the UAV's place among those drawn) puts its labels below the marks (even rows) or above them (odd rows),
+    further out every second row, so that two UAVs' labels of one car do not overlap."""
     if not len(mark.track):
         return
     h, w = img.shape[:2]
     px, front = _pixels(view, _at_ground(mark.xy, z), w, h)
     col = rgb255(mark.rgb)
-    font, scale, thick = cv2.FONT_HERSHEY_SIMPLEX, _TRACK_FONT * s, max(1, s // 2)
-    dy = (row + 1) * 9 * s
+    scale, thick = _TRACK_FONT * s, max(1, s // 2)
+    out = row // 2
+    dy = (10 + 12 * out) * s if row % 2 == 0 else -(4 + 12 * out) * s
     for k in np.flatnonzero(front & ~mark.is_target):
         c = (int(px[k, 0]), int(px[k, 1]))
         cv2.circle(img, c, 3 * s * _ONE, col, 1, cv2.LINE_AA, _SHIFT)
         org = (c[0] // _ONE + 4 * s, c[1] // _ONE + dy)
-        cv2.putText(img, str(int(mark.track[k])), org, font, scale, (0, 0, 0), thick + 1, cv2.LINE_AA)
-        cv2.putText(img, str(int(mark.track[k])), org, font, scale, col, thick, cv2.LINE_AA)
+        _shadowed_text(img, str(int(mark.track[k])), org, scale, col, thick, s)
     for k in np.flatnonzero(front & mark.is_target):
         c = (int(px[k, 0]), int(px[k, 1]))
         cv2.circle(img, c, 4 * s * _ONE, col, -1, cv2.LINE_AA, _SHIFT)
         cv2.circle(img, c, 4 * s * _ONE, (0, 0, 0), 1, cv2.LINE_AA, _SHIFT)
         org = (c[0] // _ONE + 6 * s, c[1] // _ONE + dy)
         text = f"{int(mark.track[k])} p={float(mark.p_target[k]):.2f}"
-        cv2.putText(img, text, org, font, 1.3 * scale, (0, 0, 0), thick + 2, cv2.LINE_AA)
-        cv2.putText(img, text, org, font, 1.3 * scale, col, thick, cv2.LINE_AA)
+        _shadowed_text(img, text, org, 1.3 * scale, col, thick, s)
+
+
+def _shadowed_text(img: np.ndarray, text: str, org: tuple[int, int], scale: float, rgb: tuple[int, int, int],
+                   thick: int, shift: int) -> None:
+    """Text in ``rgb`` over a black copy of itself shifted by ``shift`` px down and right (readable on any ground)."""
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    cv2.putText(img, text, (org[0] + shift, org[1] + shift), font, scale, (0, 0, 0), thick, cv2.LINE_AA)
+    cv2.putText(img, text, org, font, scale, rgb, thick, cv2.LINE_AA)
 
 
 def _brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int) -> None:

@@ -8,6 +8,9 @@
 - ``plots/links.png``: with a lossy radio, each UAV pair's delivery probability over time under the run's channel model;
 - ``plots/search.png``: with a set-membership search team, the set areas over time and the sets on the map
   (:mod:`simulator.plots_search`);
+- ``plots/tracks.png``: with a multi-target tracker (a ``tracks`` stream), every track, the one taken for the target
+  and every vehicle's truth per UAV, with the target track's ``p_target`` over time (:mod:`simulator.plots_tracks`);
+  ``errors.png`` then marks the ID switches;
 - ``plots/relay.png``: with fusion at a base station, the routes to it (each UAV's next hop, drawn every 10 s over the
   flown paths) and each UAV's route probability β over time with the packets lost.
 """
@@ -19,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from simulator.plots_search import search_plot
+from simulator.plots_tracks import mark_id_switches, tracks_plot
 from simulator.runrecord import RunRecord, load_run
 
 __all__ = ["write_geometry", "write_plots"]
@@ -108,6 +112,7 @@ def write_plots(run_dir: str | Path) -> list[Path]:
             sig = 2 * np.sqrt(np.clip(e["pxx"][ok] + e["pyy"][ok], 0, None))
             if np.isfinite(sig).any():
                 ax.plot(e["t"][ok], sig, color=c, lw=0.8, ls="--", label=f"UAV {int(u)} 2σ")
+        mark_id_switches(ax, rec, _COLORS)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("position error (m)")
         ax.set_title("target position error against truth")
@@ -138,6 +143,9 @@ def write_plots(run_dir: str | Path) -> list[Path]:
         path = draw(plt, rec, world, plots)
         if path is not None:
             written.append(path)
+    path = tracks_plot(plt, rec, world, plots, _COLORS)
+    if path is not None:
+        written.append(path)
     return written
 
 

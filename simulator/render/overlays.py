@@ -4,6 +4,10 @@ Every world-space mark (the true and estimated target positions, the estimate's 
 circle, UAV trails, radar detections) is projected with the frame's own :class:`CameraView`, so it lands where the
 3D renderer drew the scene. Lines are drawn with 4 fractional bits (``shift=4``) for sub-pixel placement.
 
+A multi-target tracker's live tracks are drawn per UAV as small rings with their ids; the track the UAV takes for the
+target as a filled dot with its id and ``p_target``. Ground vehicles other than the target (traffic) get small grey
+corner brackets, the target the white ones.
+
 Ground regions (the search's sets) are filled translucently: each is cut to the part of the ground plane in front of
 the camera (:func:`_in_front`), projected (a plane seen through a pinhole maps straight edges to straight edges
 there), cut to the image in pixels and filled, holes included.
@@ -27,14 +31,16 @@ from simulator.render.projection import CameraView
 from simulator.render.timeline import RadarScan
 from simulator.render.world_marks import probability_rgb
 
-__all__ = ["LEGEND", "SEARCH_LEGEND", "EstimateMark", "GroundRegion", "OverlayFrame", "covariance_ellipse", "draw_hud",
-           "draw_overlays", "rgb255"]
+__all__ = ["LEGEND", "SEARCH_LEGEND", "TRACKS_LEGEND", "EstimateMark", "GroundRegion", "OverlayFrame", "TrackMark",
+           "covariance_ellipse", "draw_hud", "draw_overlays", "rgb255"]
 
 _SHIFT = 4
 _ONE = 1 << _SHIFT
 _LIMIT = 1e5  # px: keeps far off-screen points inside cv2's fixed-point range
 _TRUTH_RGB = (255, 255, 255)
 _CLUTTER_RGB = (255, 230, 0)
+_TRAFFIC_RGB = (150, 150, 150)
+_TRACK_FONT = 0.3  # text scale of track labels per unit line scale
 _CIRCLE_POINTS = 72
 _FRONT_MARGIN = 1.0  # m beyond the near plane: regions are cut there before they are projected
 _IMAGE_MARGIN = 16  # px around the image kept when a projected region is cut to it
@@ -65,6 +71,19 @@ class EstimateMark:
 
 
 @dataclass(frozen=True)
+class TrackMark:
+    """One UAV's live tracks: its colour (RGB in [0, 1]), track ids (K,), positions xy (K, 2) m, ``p_target`` (K,)
+    and which the UAV takes for the target (K,) bool."""
+
+    uav: int
+    rgb: tuple[float, float, float]
+    track: np.ndarray
+    xy: np.ndarray
+    p_target: np.ndarray
+    is_target: np.ndarray
+
+
+@dataclass(frozen=True)
 class GroundRegion:
     """A region of the ground to fill: its colour (RGB in [0, 1]), opacity in [0, 1] and shape (a shapely polygon or
     multipolygon in world x, y, m)."""
@@ -83,7 +102,9 @@ class OverlayFrame:
     which the 2D estimates, ellipses and standoff circles are drawn; ``regards`` (colour, closed ground outline
     (K, 3) m) the radars' fields of regard; ``links`` (p_a, p_b, delivery probability) the radio links;
     ``constrained_roads`` (colour, centre-line (K, 3) m) the road each road-constrained estimator holds the target on;
-    ``regions`` ground regions filled at ``ground_z`` under every other mark, in order.
+    ``regions`` ground regions filled at ``ground_z`` under every other mark, in order; ``tracks`` every UAV's live
+    tracks (drawn at ``ground_z``); ``traffic_W`` the true positions (M, 3) m of the ground vehicles other than the
+    target.
     """
 
     target_W: np.ndarray | None
@@ -97,6 +118,8 @@ class OverlayFrame:
     constrained_roads: list[tuple[tuple[float, float, float], np.ndarray]] = field(default_factory=list)
     links: list[tuple[np.ndarray, np.ndarray, float]] = field(default_factory=list)
     regions: list[GroundRegion] = field(default_factory=list)
+    tracks: list[TrackMark] = field(default_factory=list)
+    traffic_W: np.ndarray | None = None
 
 
 def _pixels(view: CameraView, pts_W: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
@@ -237,6 +260,10 @@ def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame,
             else:
                 cv2.circle(img, c, 2 * s * _ONE, col, -1, cv2.LINE_AA, _SHIFT)
                 cv2.circle(img, c, 2 * s * _ONE, (0, 0, 0), 1, cv2.LINE_AA, _SHIFT)
+    if frame.traffic_W is not None and len(frame.traffic_W):
+        _traffic_brackets(img, view, frame.traffic_W, s)
+    for k, mark in enumerate(frame.tracks):
+        _draw_tracks(img, view, mark, frame.ground_z, s, k)
     for rgb, name, p_W in frame.uavs:
         px, front = _pixels(view, p_W, w, h)
         if front[0]:
@@ -246,6 +273,60 @@ def draw_overlays(img: np.ndarray, view: CameraView, frame: OverlayFrame,
             cv2.putText(img, name, org, cv2.FONT_HERSHEY_SIMPLEX, 0.35 * s, rgb255(rgb), max(1, s // 2), cv2.LINE_AA)
     if frame.target_W is not None:
         _brackets(img, view, frame.target_W, s)
+
+
+def _bracket_corners(c: np.ndarray, r: int, k: int) -> list[np.ndarray]:
+    """The four corner polylines (3 points each, fixed-point pixels) of brackets of half-size ``r`` and arm ``k``
+    around each centre of ``c`` (N, 2)."""
+    out = []
+    for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        corner = c + np.array([sx * r, sy * r])
+        pts = np.stack([corner - np.array([sx * k, 0]), corner, corner - np.array([0, sy * k])], axis=1)
+        out.extend(pts.astype(np.int32))
+    return out
+
+
+def _traffic_brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int) -> None:
+    """Small grey corner brackets around every traffic car (one polyline call for all of them)."""
+    h, w = img.shape[:2]
+    px, front = _pixels(view, p_W, w, h)
+    if front.any():
+        cv2.polylines(img, _bracket_corners(px[front], 7 * s * _ONE, 3 * s * _ONE), False, _TRAFFIC_RGB, s,
+                      cv2.LINE_AA, _SHIFT)
+
+
+def _draw_tracks(img: np.ndarray, view: CameraView, mark: TrackMark, z: float, s: int, row: int) -> None:
+    """One UAV's tracks: a ring and the id per track; the target track filled, with its id and ``p_target``.
+    ``row`` (the UAV's place among those drawn) puts its labels below the marks (even rows) or above them (odd rows),
+    further out every second row, so that two UAVs' labels of one car do not overlap."""
+    if not len(mark.track):
+        return
+    h, w = img.shape[:2]
+    px, front = _pixels(view, _at_ground(mark.xy, z), w, h)
+    col = rgb255(mark.rgb)
+    scale, thick = _TRACK_FONT * s, max(1, s // 2)
+    out = row // 2
+    dy = (10 + 12 * out) * s if row % 2 == 0 else -(4 + 12 * out) * s
+    for k in np.flatnonzero(front & ~mark.is_target):
+        c = (int(px[k, 0]), int(px[k, 1]))
+        cv2.circle(img, c, 3 * s * _ONE, col, 1, cv2.LINE_AA, _SHIFT)
+        org = (c[0] // _ONE + 4 * s, c[1] // _ONE + dy)
+        _shadowed_text(img, str(int(mark.track[k])), org, scale, col, thick, s)
+    for k in np.flatnonzero(front & mark.is_target):
+        c = (int(px[k, 0]), int(px[k, 1]))
+        cv2.circle(img, c, 4 * s * _ONE, col, -1, cv2.LINE_AA, _SHIFT)
+        cv2.circle(img, c, 4 * s * _ONE, (0, 0, 0), 1, cv2.LINE_AA, _SHIFT)
+        org = (c[0] // _ONE + 6 * s, c[1] // _ONE + dy)
+        text = f"{int(mark.track[k])} p={float(mark.p_target[k]):.2f}"
+        _shadowed_text(img, text, org, 1.3 * scale, col, thick, s)
+
+
+def _shadowed_text(img: np.ndarray, text: str, org: tuple[int, int], scale: float, rgb: tuple[int, int, int],
+                   thick: int, shift: int) -> None:
+    """Text in ``rgb`` over a black copy of itself shifted by ``shift`` px down and right (readable on any ground)."""
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    cv2.putText(img, text, (org[0] + shift, org[1] + shift), font, scale, (0, 0, 0), thick, cv2.LINE_AA)
+    cv2.putText(img, text, org, font, scale, rgb, thick, cv2.LINE_AA)
 
 
 def _brackets(img: np.ndarray, view: CameraView, p_W: np.ndarray, s: int) -> None:
@@ -270,6 +351,10 @@ LEGEND = (("white brackets: true target   x: estimate   ellipse around it: 2-sig
           ("pale outline: radar field of regard   UAV-to-UAV line: radio link, red (Pr 0) to green (Pr 1)   "
            "thick road line: road the filter is constrained to",
            (0.9, 0.9, 0.9)))
+
+
+TRACKS_LEGEND = (("small rings + numbers: a UAV's tracks   filled dot: the track it takes for the target, with "
+                  "p(target)   grey brackets: other cars (truth)", (0.9, 0.9, 0.9)),)
 
 
 SEARCH_LEGEND = (("blue fill: X-bar, where an undetected target may be   red fill: X, where a detected target may be "

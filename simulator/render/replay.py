@@ -19,8 +19,8 @@ import numpy as np
 
 from simulator.render.cameras import CameraInputs, CameraRig, ChaseCamera, OnboardCamera, OrbitCamera, TopDownCamera
 from simulator.render.config import RenderConfig
-from simulator.render.overlays import (LEGEND, SEARCH_LEGEND, EstimateMark, GroundRegion, OverlayFrame, draw_hud,
-                                       draw_overlays)
+from simulator.render.overlays import (LEGEND, SEARCH_LEGEND, TRACKS_LEGEND, EstimateMark, GroundRegion, OverlayFrame,
+                                       TrackMark, draw_hud, draw_overlays)
 from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
 from simulator.render.timeline import Timeline
@@ -90,6 +90,9 @@ class Replayer:
         self.geometry = load_geometry(self.run_dir / "geometry.npz")
         self.uav_span = 2.0 * world.uav_arm_length() * cfg.uav_scale  # tip to tip, m
         self._sizes = [cfg.car_size or world.vehicle_size(v) for v in self.vehicle_index]
+        # other cars: those of role traffic (every car but the target when the world does not say)
+        self._traffic = [v for v in self.vehicle_index
+                         if v != self.target and world.vehicle_role(v) in ("traffic", None)]
         self._decoys = world.decoys()
         self.layout = self._layout()
         self.stage = self._choose_stage()
@@ -210,6 +213,7 @@ class Replayer:
             if got is not None:
                 marks.append(EstimateMark(u, UAV_COLORS[u % len(UAV_COLORS)], got[0], got[1], self.standoff.get(u)))
         trails = [(UAV_COLORS[u % len(UAV_COLORS)], tl.uavs[u].trail(t, cfg.trail_s)) for u in self.uav_index]
+        traffic_W = np.array([tl.vehicles[v].at(t)[0] for v in self._traffic]) if self._traffic else None
         return OverlayFrame(target_W=p_t if self.target is not None else None, estimates=marks, trails=trails,
                             scans=tl.radar_scans(t),
                             scan_rgb={u: UAV_COLORS[u % len(UAV_COLORS)] for u in self.uav_index},
@@ -217,7 +221,16 @@ class Replayer:
                                   for u in self.uav_index],
                             ground_z=float(p_t[2]), regards=self._regard_marks(t, float(p_t[2])),
                             links=self._link_marks(t), constrained_roads=self._road_marks(t, float(p_t[2])),
-                            regions=self.search_sets.regions(t))
+                            regions=self.search_sets.regions(t), tracks=self._track_marks(t), traffic_W=traffic_W)
+
+    def _track_marks(self, t: float) -> list[TrackMark]:
+        marks = []
+        for u, steps in sorted(self.timeline.tracks.items()):
+            got = steps.at(t)
+            if got is not None:
+                marks.append(TrackMark(u, UAV_COLORS[u % len(UAV_COLORS)], got.track, got.xy, got.p_target,
+                                       got.is_target))
+        return marks
 
     def _road_marks(self, t: float, z: float) -> list[tuple[tuple[float, float, float], np.ndarray]]:
         marks = []
@@ -243,7 +256,8 @@ class Replayer:
         return self.links.at(t, [self.timeline.uavs[u].at(t)[0] for u in self.uav_index])
 
     def hud_lines(self, t: float) -> list[tuple[str, tuple[float, float, float]]]:
-        """HUD text: the time, then per UAV its estimate's position error and 2σ, and its solver time if recorded."""
+        """HUD text: the time, then per UAV its estimate's position error and 2σ, its tracks and target track if it
+        keeps tracks, and its solver time if recorded."""
         tl = self.timeline
         p_t = self._target_at(t)
         lines = [(f"{self.title}  t = {t:6.2f} s", (1.0, 1.0, 1.0))]
@@ -259,6 +273,12 @@ class Replayer:
                 err = float(np.hypot(*(got[0] - p_t[:2])))
                 two_sigma = 2.0 * float(np.sqrt(max(np.trace(got[1]), 0.0)))
                 text = f"{name}: error {err:5.1f} m  2sigma {two_sigma:5.1f} m"
+            held = tl.tracks[u].at(t) if u in tl.tracks else None
+            if held is not None:
+                text += f"  {len(held.track)} tracks"
+                if held.is_target.any():
+                    k = int(np.argmax(np.where(held.is_target, held.p_target, -np.inf)))
+                    text += f", target {int(held.track[k])} (p {float(held.p_target[k]):.2f})"
             solve = (per_uav.get(name) or {}).get("solve_ms_p50")
             if solve is not None:
                 text += f"  solve {float(solve):.1f} ms"
@@ -311,7 +331,8 @@ class Replayer:
         if cfg.overlays:
             draw_hud(out, self.hud_lines(t))
             if cfg.legend:
-                draw_hud(out, LEGEND + (SEARCH_LEGEND if self.search_sets else ()), corner="bottom", size=0.7)
+                draw_hud(out, LEGEND + (SEARCH_LEGEND if self.search_sets else ())
+                         + (TRACKS_LEGEND if self.timeline.tracks else ()), corner="bottom", size=0.7)
             for pnl in panels[1:]:
                 cv2.line(out, (pnl.x0, 0), (pnl.x0, cfg.height - 1), (20, 20, 20), 2)
         return RenderedFrame(t=t, rgb=out, panels=panels)

@@ -4,7 +4,9 @@ Truth is recorded at ``sim.record_hz`` (10–20 Hz) and video frames fall betwee
 positions linearly, attitudes by normalised linear interpolation of quaternions (``q = normalise((1 - a) q0 + a q1)``
 after flipping ``q1`` to the hemisphere of ``q0``; within 1/20 s of a quadrotor's motion it differs from slerp by far
 less than a pixel). Estimates are what a UAV believed, so they are *held* (the last valid sample at or before ``t``),
-never interpolated. Times outside the record clamp to its ends.
+never interpolated. Times outside the record clamp to its ends. A multi-target tracker's tracks (the ``tracks``
+stream) are held the same way: the live tracks of a UAV's last agent step at or before ``t``, found by a binary search
+over the steps, which are indexed once (rows sorted by UAV and tick, one slice per step).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EstimateTrack", "PoseTrack", "RadarScan", "Timeline", "interp_positions", "nlerp_quaternions"]
+__all__ = ["EstimateTrack", "PoseTrack", "RadarScan", "Timeline", "TrackSet", "TrackSteps", "interp_positions",
+           "nlerp_quaternions"]
 
 
 def _bracket(t_samples: np.ndarray, t: float) -> tuple[int, int, float]:
@@ -87,6 +90,47 @@ class EstimateTrack:
 
 
 @dataclass(frozen=True)
+class TrackSet:
+    """The live tracks of one UAV at one agent step: ids (K,), positions xy (K, 2) m, ``p_target`` (K,) and
+    whether the UAV takes each for the target (K,) bool."""
+
+    t: float
+    track: np.ndarray
+    xy: np.ndarray
+    p_target: np.ndarray
+    is_target: np.ndarray
+
+
+class TrackSteps:
+    """One UAV's ``tracks`` rows, indexed by agent step once: :meth:`at` returns a step's rows as array slices.
+
+    Parameters
+    ----------
+    d : dict[str, np.ndarray]
+        The UAV's rows of the ``tracks`` stream (any order).
+    """
+
+    def __init__(self, d: dict[str, np.ndarray]) -> None:
+        order = np.lexsort((d["track"], d["tick"]))
+        tick = d["tick"][order]
+        starts = np.flatnonzero(np.r_[True, tick[1:] != tick[:-1]])
+        self.t = d["t"][order][starts]
+        self._bounds = np.r_[starts, len(tick)]
+        self._track = d["track"][order].astype(np.int64)
+        self._xy = np.c_[d["x"], d["y"]][order]
+        self._p = d["p_target"][order].astype(float)
+        self._target = d["is_target"][order].astype(bool)
+
+    def at(self, t: float) -> TrackSet | None:
+        """The tracks of the last step at or before ``t`` s (None before the first step)."""
+        k = int(np.searchsorted(self.t, t + 1e-9, side="right")) - 1
+        if k < 0:
+            return None
+        a, b = self._bounds[k], self._bounds[k + 1]
+        return TrackSet(float(self.t[k]), self._track[a:b], self._xy[a:b], self._p[a:b], self._target[a:b])
+
+
+@dataclass(frozen=True)
 class RadarScan:
     """One radar scan: measurement time s, sensor name, carrying UAV, points p_W (K, 3) m, clutter flags (K,)."""
 
@@ -113,7 +157,7 @@ class Timeline:
     ----------
     streams : dict[str, dict[str, np.ndarray]]
         ``RunRecord.streams``: ``uav_truth`` is required; ``vehicle_truth`` (absent in worlds without cars),
-        ``estimates`` and ``detections`` are optional.
+        ``estimates``, ``tracks`` and ``detections`` are optional.
     scan_hold : float
         A radar scan is shown for at most this long after its measurement time, s.
     """
@@ -136,6 +180,9 @@ class Timeline:
                 P = np.stack([np.c_[d["pxx"], d["pxy"]], np.c_[d["pxy"], d["pyy"]]], axis=1)
                 self.estimates[u] = EstimateTrack(d["t"], np.c_[d["x"], d["y"]], P, d["valid"].astype(bool),
                                                   d.get("road"))
+        tracks = streams.get("tracks") or {}
+        self.tracks: dict[int, TrackSteps] = ({u: TrackSteps(d) for u, d in _group(tracks, "uav").items()}
+                                              if len(tracks.get("t", ())) else {})
         self._det = None
         det = streams.get("detections")
         if det is not None and len(det.get("t_meas", ())):

@@ -82,6 +82,12 @@ class ReplayWorld:
         gv = self.world.ground_vehicles
         return car_size(gv[v].type if v < len(gv) else GroundVehicleSpec.model_fields["type"].default)
 
+    def vehicle_role(self, v: int) -> str | None:
+        """The role of ground vehicle ``v`` (``target``, ``decoy``, ``traffic``), or None when the world does not list
+        it."""
+        gv = self.world.ground_vehicles
+        return gv[v].role if v < len(gv) else None
+
     def uav_arm_length(self) -> float:
         """Rotor arm length of the first UAV's airframe (the schema's default airframe without UAVs), m."""
         uavs = self.world.uavs

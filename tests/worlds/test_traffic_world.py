@@ -1,0 +1,33 @@
+"""The traffic world (``road_standoff_traffic``): ``road_standoff`` with one designated target among at least 20
+kinematic traffic cars, each on its own street of the town, no two starting close together."""
+
+import itertools
+
+import numpy as np
+
+from worlds.build import build_geometry
+from worlds.loader import load_world
+
+
+def _street(road_id: str) -> str:
+    return road_id.rsplit(".", 1)[0]  # a road and its twin (.f / .r) share a street
+
+
+def test_one_target_among_kinematic_traffic_on_distinct_streets_spaced_apart():
+    loaded = load_world("road_standoff_traffic")
+    world = loaded.world
+    cars = world.ground_vehicles
+    assert [g.id for g in cars if g.role == "target"] == ["car1"]
+    traffic = [g for g in cars if g.role == "traffic"]
+    assert len(traffic) >= 20 and len(traffic) == len(cars) - 1
+    assert all(g.dynamics == "kinematic" for g in traffic)
+    assert {g.type for g in traffic} == {"sedan", "van"}
+    streets = [_street(g.route.random_walk_from) for g in cars]
+    assert len(set(streets)) == len(streets)
+    network = build_geometry(world, loaded.path, np.random.default_rng(world.sim.seed)).network
+    starts = [np.asarray(network.roads[g.route.random_walk_from].point(g.route.start_s)) for g in cars]
+    closest = min(float(np.linalg.norm(a - b)) for a, b in itertools.combinations(starts, 2))
+    assert closest >= 30.0, closest  # 35 m by construction (25–75 m into 100 m streets)
+    # the rest is road_standoff's
+    base = load_world("road_standoff").world
+    assert world.uavs == base.uavs and world.roads == base.roads and world.sim == base.sim

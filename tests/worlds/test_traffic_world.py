@@ -30,4 +30,9 @@ def test_one_target_among_kinematic_traffic_on_distinct_streets_spaced_apart():
     assert closest >= 30.0, closest  # 35 m by construction (25–75 m into 100 m streets)
     # the rest is road_standoff's
     base = load_world("road_standoff").world
-    assert world.uavs == base.uavs and world.roads == base.roads and world.sim == base.sim
+    assert world.roads == base.roads and world.sim == base.sim
+    # the UAVs are road_standoff's, with class readings added to their sensors (and any sensor added after them)
+    for u, b in zip(world.uavs, base.uavs, strict=True):
+        assert u.autonomy == b.autonomy and u.initial == b.initial
+        for s, sb in zip(u.sensors, b.sensors, strict=False):
+            assert s.model_copy(update={"classify": None}) == sb

@@ -24,6 +24,7 @@ import numpy as np
 from interfaces.setpoints import Setpoint
 from autonomy.diagnostics import HoldsTracks
 from interfaces.state import OwnState, TargetEstimate, TrackPicture
+from autonomy.sensing.camera import Camera
 from autonomy.sensing.channel import Channel
 from autonomy.sensing.measurement import SensorOutput
 from autonomy.sensing.scene import SceneQuery, SensorPose
@@ -157,7 +158,9 @@ class Assembly:
         truth = self.truth.targets()
         st = self.quads.state
         for slot in due:
-            pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav], v_W=st.v_W[slot.uav])
+            look = (slot.sensor.look_point(self.latest_estimates.get(slot.uav), t)
+                    if isinstance(slot.sensor, Camera) else None)  # a gimbal cued by the last agent step's estimate
+            pose = SensorPose(p_W=st.p_W[slot.uav], q_WB=st.q_WB[slot.uav], v_W=st.v_W[slot.uav], look_at_W=look)
             out = slot.sensor.measure(t, pose, truth, self.scene_query, slot.rng)
             self.recording.detections(tick, slot.uav, slot.name, out)
             self._deliver_scan(slot, t, out)

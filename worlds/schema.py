@@ -501,6 +501,9 @@ class CameraSpec(SensorBase):
     min_blob_area_px: int | None = Field(None, gt=0)
     classify: CameraClassifySpec | None = Field(None, description="class readings of each detection (off when "
                                                                   "left out): colour, body")
+    pointing: Literal["body", "track"] = Field("body", description="body: the axis is fixed by gimbal_pitch_deg "
+                                               "and stabilised; track: a pan-tilt gimbal points it at the UAV's target "
+                                               "estimate (anywhere below the horizon), body pose until there is one")
 
 
 class BearingSpec(SensorBase):

@@ -15,8 +15,20 @@ The reported pixel box is the blob's box shifted by the same centroid noise. The
 tell the recorder which target a blob came from (``TargetTruth.seg_ids``; without them, by projecting the targets).
 Two cars whose blobs touch in the image give one detection.
 
-Gimbal: the camera frame is ``R_WC = R_z(yaw) R_y(pitch)`` when stabilised (it follows the heading only) or
-``R_WC = R_WB R_y(pitch)`` when fixed to the airframe; positive ``gimbal_pitch`` looks down.
+Gimbal: with ``pointing="body"`` the camera frame is ``R_WC = R_z(yaw) R_y(pitch)`` when stabilised (it follows the
+heading only) or ``R_WC = R_WB R_y(pitch)`` when fixed to the airframe; positive ``gimbal_pitch`` looks down.
+
+With ``pointing="track"`` the camera hangs in a two-axis (pan, tilt) gimbal below the airframe, stabilised in the
+world frame, that points the optical axis at the look point the pose carries (``SensorPose.look_at_W``: the UAV's
+own target estimate, see :func:`look_point`). With ``d = look_at_W - p_C`` from the optical centre ``p_C``,
+
+    pan = atan2(d_y, d_x),   tilt = atan2(-d_z, ||d_xy||),   R_WC = R_z(pan) R_y(tilt),
+
+so the look point projects onto the principal point and the image is kept level (no roll). The gimbal reaches the
+whole lower hemisphere: tilt is clipped to ``[0, pi/2]`` (a look point above the camera is watched at the horizon,
+in its direction), and straight down (``d_xy = 0``) the pan is the heading. It slews at once (no rate limit, no
+lag). Without a look point (no estimate yet, or one straight above the optical centre or at it) the camera takes
+its ``"body"`` pose (``stabilised``, ``gimbal_pitch``), which is otherwise unused in this mode.
 
 With ``classify`` (:class:`~autonomy.sensing.classify.Classifier` of ``"colour"`` and / or ``"body"``), every
 detection also carries the camera's readings of the car's paint colour and body type (``Detection.classes``) of
@@ -35,15 +47,34 @@ import cv2
 import numpy as np
 
 from autonomy.estimation.measurements import BearingDetectionModel
+from interfaces.state import TargetEstimate
 
 from .classify import Classifier, check_classifiers, class_generator, read_classes
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation
 from .scene import CameraIntrinsics, CameraPose, RenderedImage, SceneQuery, SensorPose, TargetTruth, yaw_rot
 
-__all__ = ["CAMERA_ATTRIBUTES", "CAR_RGBA", "Blob", "Camera", "CameraConfig", "camera_pose", "detect_blobs"]
+__all__ = [
+    "CAMERA_ATTRIBUTES",
+    "CAMERA_POINTINGS",
+    "CAR_RGBA",
+    "GROUND_Z_M",
+    "Blob",
+    "Camera",
+    "CameraConfig",
+    "camera_pose",
+    "detect_blobs",
+    "look_point",
+]
 
 CAMERA_ATTRIBUTES: tuple[str, ...] = ("colour", "body")
 """The class attributes a camera may read: the paint colour and the body type."""
+
+CAMERA_POINTINGS: tuple[str, ...] = ("body", "track")
+"""Where the gimbal points: fixed to the airframe or the heading (``"body"``), or at the UAV's target estimate
+(``"track"``)."""
+
+GROUND_Z_M = 0.0
+"""Height of the (flat) ground the look point of a horizontal target estimate is put on (m)."""
 
 CAR_RGBA: tuple[float, float, float, float] = (1.0, 0.0, 1.0, 1.0)
 """Colour of every car body in the simulator (RGBA in [0, 1]): saturated magenta, OpenCV hue 150."""
@@ -89,6 +120,9 @@ class CameraConfig:
     classify : tuple[Classifier, ...]
         Class readings attached to every detection (attributes of :data:`CAMERA_ATTRIBUTES`); empty: none, and no
         random number is drawn for them.
+    pointing : str
+        ``"body"``: the optical axis is fixed by ``gimbal_pitch`` and ``stabilised``; ``"track"``: the gimbal points
+        it at the pose's look point, falling back to ``"body"`` without one (module docstring).
     """
 
     width: int = 160
@@ -108,8 +142,11 @@ class CameraConfig:
     latency_s: float = 0.0
     keep_frame: bool = False
     classify: tuple[Classifier, ...] = ()
+    pointing: str = "body"
 
     def __post_init__(self) -> None:
+        if self.pointing not in CAMERA_POINTINGS:
+            raise ValueError(f"CameraConfig.pointing must be one of {CAMERA_POINTINGS}, got {self.pointing!r}")
         object.__setattr__(self, "classify", check_classifiers("CameraConfig", self.classify, CAMERA_ATTRIBUTES))
         if self.width < 1 or self.height < 1:
             raise ValueError(f"CameraConfig size must be >= 1 px, got {self.width}x{self.height}")
@@ -147,8 +184,26 @@ class CameraConfig:
 def camera_pose(config: CameraConfig, pose: SensorPose) -> CameraPose:
     """Camera pose of a camera mounted on the body at ``pose`` (see the module docstring for the gimbal)."""
     R_WB = pose.R_WB
+    p_C = pose.p_W + R_WB @ np.asarray(config.mount_offset_B)
+    if config.pointing == "track" and pose.look_at_W is not None:
+        d = pose.look_at_W - p_C
+        horizontal = float(np.hypot(d[0], d[1]))
+        if horizontal > 0.0 or d[2] < 0.0:
+            pan = float(np.arctan2(d[1], d[0])) if horizontal > 0.0 else pose.yaw
+            tilt = float(np.clip(np.arctan2(-d[2], horizontal), 0.0, np.pi / 2))
+            return CameraPose(p_W=p_C, R_WC=yaw_rot(pan) @ _rot_y(tilt))
     base = yaw_rot(pose.yaw) if config.stabilised else R_WB
-    return CameraPose(p_W=pose.p_W + R_WB @ np.asarray(config.mount_offset_B), R_WC=base @ _rot_y(config.gimbal_pitch))
+    return CameraPose(p_W=p_C, R_WC=base @ _rot_y(config.gimbal_pitch))
+
+
+def look_point(estimate: TargetEstimate | None, t: float) -> np.ndarray | None:
+    """Where a target-cued gimbal points at time ``t`` (s): the estimate carried forward at constant velocity to
+    ``t``, ``p + v (t - t_est)`` (m), on the ground (:data:`GROUND_Z_M`) when the estimate is horizontal; None
+    without an estimate."""
+    if estimate is None:
+        return None
+    p = estimate.p_W + (t - estimate.t) * estimate.v_W
+    return p if p.size == 3 else np.array([p[0], p[1], GROUND_Z_M])
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -204,6 +259,11 @@ class Camera(Sensor):
         self.latency_s = config.latency_s
         self.intrinsics = config.intrinsics
         self.model = BearingDetectionModel(dim=2, name="camera")  # [az, el] of the blob's centroid ray
+
+    def look_point(self, estimate: TargetEstimate | None, t: float) -> np.ndarray | None:
+        """The look point this camera's gimbal takes at ``t`` (s) from its UAV's target estimate (:func:`look_point`);
+        None when it does not point at the track."""
+        return look_point(estimate, t) if self.config.pointing == "track" else None
 
     def bearing_of_pixel(self, uv: np.ndarray, cam: CameraPose) -> np.ndarray:
         """World azimuth and elevation (N, 2) (rad) of the rays through pixels ``uv`` (N, 2)."""

@@ -74,11 +74,16 @@ class SensorPose:
         (4,) body-to-world attitude quaternion (x, y, z, w).
     v_W : np.ndarray
         (3,) body velocity in the world frame (m/s); used for range-rate measurements. Defaults to zero.
+    look_at_W : np.ndarray | None
+        (3,) world point a target-cued gimbal points its sensor at (m): the carrier's own target estimate, handed in
+        by the simulator only to sensors that point at the track; None (default): no cue, the sensor keeps its
+        body-fixed or heading-stabilised pose.
     """
 
     p_W: np.ndarray
     q_WB: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 1.0]))
     v_W: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    look_at_W: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "p_W", _vec("SensorPose.p_W", self.p_W, (3,)))
@@ -88,6 +93,8 @@ class SensorPose:
             raise ValueError(f"SensorPose.q_WB must be a unit quaternion, got norm {n}")
         object.__setattr__(self, "q_WB", q)
         object.__setattr__(self, "v_W", _vec("SensorPose.v_W", self.v_W, (3,)))
+        if self.look_at_W is not None:
+            object.__setattr__(self, "look_at_W", _vec("SensorPose.look_at_W", self.look_at_W, (3,)))
 
     @property
     def R_WB(self) -> np.ndarray:

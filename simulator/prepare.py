@@ -89,7 +89,7 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOpti
             estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator", u.autonomy.estimator,
                                  lambda: build_estimator(u, i, geometry.network, geometry.buildings))
         estimator = _checked(loaded, f"uavs[{i}].autonomy.estimator.tracking", u.autonomy.estimator.tracking,
-                             lambda: multi_target(estimator, world, u))
+                             lambda: multi_target(estimator, world, u, geometry.network))
         if options.guidance_factory is not None:
             guidance = options.guidance_factory(i, u)
         else:

@@ -9,11 +9,12 @@ older than ``max_age_s``:
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
    does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
    pairs are one car;
-3. the team's belief of which car is the target: one's own track k has weight ``p_k · exp(Σ E_j)``, its own target
-   probability times the teammates' class evidence ``E_j`` of the tracks assigned to it (evidence of other sensors,
-   so nothing is counted twice); a teammate's track assigned to none of one's own competes with weight
-   ``p_none · p_j`` (one's own belief that the target is in no track, times the teammate's). Normalised with
-   ``p_none``;
+3. the team's belief of which car is the target is the linear opinion pool of the members' beliefs: one's own
+   track k has team probability ``(p_k + Σ_j p_j) / n``, its own target probability plus those of the teammates'
+   tracks assigned to it, over the ``n`` UAVs whose pictures are in (oneself included); a teammate's track assigned
+   to none of one's own has ``p_j / n``. An average of beliefs counts no evidence twice (each member's belief already
+   holds its own cue, continuity and class readings), so a UAV that has not yet told the target from a look-alike
+   follows a teammate that has;
 4. the most probable candidate, if its probability is at least ``min_probability``, is the target: its estimate is
    fused (convex or covariance intersection) with every teammate track assigned to it. Otherwise the UAV's own
    estimate stands (its target track, or where it searches).
@@ -116,34 +117,29 @@ class TeamTrackFusion:
         the target; ``local`` one's own target estimate) and the teammates' ``pictures`` (module docstring)."""
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
         own_est = [predict_estimate(r.estimate, t, self.q) for r in mine]
-        weight = np.array([r.target_probability for r in mine], dtype=float)
-        p_none = max(0.0, 1.0 - float(weight.sum()))
-        log_boost = np.zeros(len(mine))
+        pooled = np.array([r.target_probability for r in mine], dtype=float)
         fused_parts: list[list[TargetEstimate]] = [[] for _ in mine]
         loose: list[tuple[float, TargetEstimate]] = []
+        members = 1
         for pic in pictures:
             if not 0.0 <= t - pic.t <= self.max_age_s:
                 continue
+            members += 1
             theirs = [r for r in pic.tracks if r.estimate.P is not None]
             their_est = [predict_estimate(r.estimate, t, self.q) for r in theirs]
             pairs = associate_tracks(own_est, their_est, self.threshold)
             self.associated += len(pairs)
             taken = set()
             for i, j in pairs:
-                log_boost[i] += theirs[j].evidence
+                pooled[i] += theirs[j].target_probability
                 fused_parts[i].append(their_est[j])
                 taken.add(j)
-            for j, r in enumerate(theirs):
-                if j not in taken and r.target_probability > 0.0:
-                    loose.append((p_none * r.target_probability, their_est[j]))
-        w = weight * np.exp(np.clip(log_boost, -50.0, 50.0))
-        total = float(w.sum()) + p_none
-        if total <= 0.0:
-            return TeamTarget(estimate=local, probability=0.0, own_track_id=None, fused_with=0)
-        best_own = int(np.argmax(w)) if len(w) else -1
+            loose.extend((theirs[j].target_probability, their_est[j]) for j in range(len(theirs))
+                         if j not in taken and theirs[j].target_probability > 0.0)
+        best_own = int(np.argmax(pooled)) if len(pooled) else -1
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
-        p_own = float(w[best_own]) / total if best_own >= 0 else 0.0
-        p_loose = loose[best_loose][0] / total if best_loose >= 0 else 0.0
+        p_own = float(pooled[best_own]) / members if best_own >= 0 else 0.0
+        p_loose = loose[best_loose][0] / members if best_loose >= 0 else 0.0
         if max(p_own, p_loose) < self.min_probability:
             return TeamTarget(estimate=local, probability=max(p_own, p_loose), own_track_id=None, fused_with=0)
         if p_own >= p_loose:

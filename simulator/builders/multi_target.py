@@ -10,7 +10,8 @@ has ``track_reports``) or holds sets is left as it is.
 
 What the team knows of the target (:func:`identity_config`): its classes (colour, body type, length class, from its
 world-file entry: the hand-off describes the car), the class frequencies of the other cars (the traffic census) and
-their density over the map.
+their density where tracks start: the other cars over the streets' length times a band of ``TRACK_BAND_M`` (tracks
+of cars lie within tens of metres of their road), or over the terrain without roads.
 """
 
 from __future__ import annotations
@@ -26,7 +27,11 @@ from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerC
 from worlds.catalog import CAR_ATTRIBUTES, car_classes
 from worlds.schema import GroundVehicleSpec, UavSpec, World
 
-__all__ = ["identity_config", "multi_target", "tracking_mode"]
+__all__ = ["TRACK_BAND_M", "identity_config", "multi_target", "tracking_mode"]
+
+TRACK_BAND_M = 100.0
+"""Width of the band around the streets where the tracks of cars start (m): about twice the largest radar range
+noise of the shipped worlds on either side of the road."""
 
 
 def tracking_mode(world: World, uav: UavSpec) -> str:
@@ -44,7 +49,7 @@ def _classes(g: GroundVehicleSpec) -> dict[str, int]:
     return car_classes(g.type, g.colour)
 
 
-def identity_config(world: World, uav: UavSpec) -> IdentityConfig:
+def identity_config(world: World, uav: UavSpec, network: Any = None) -> IdentityConfig:
     """What ``uav``'s tracker knows of the (first) designated target and of the other cars (module docstring)."""
     spec = uav.autonomy.estimator.tracking
     targets = world.target_ids()
@@ -52,6 +57,8 @@ def identity_config(world: World, uav: UavSpec) -> IdentityConfig:
     target = by_id.get(targets[0]) if targets else None
     others = [g for g in world.ground_vehicles if g.role != "decoy" and g.id not in targets]
     area = float(np.prod(world.terrain.size))
+    if network is not None and network.street_length() > 0:
+        area = min(area, float(network.street_length()) * TRACK_BAND_M)
     return IdentityConfig(
         target_classes=_classes(target) if target is not None else {},
         background=background_frequencies([_classes(g) for g in others],
@@ -68,11 +75,11 @@ def _multi_config(uav: UavSpec) -> MultiTrackerConfig:
                               merge_speed_mps=spec.merge_speed_mps, max_tracks=spec.max_tracks)
 
 
-def multi_target(estimator: Any, world: World, uav: UavSpec) -> Any:
+def multi_target(estimator: Any, world: World, uav: UavSpec, network: Any = None) -> Any:
     """``estimator`` in its multi-target form when :func:`tracking_mode` says multi (module docstring)."""
     if tracking_mode(world, uav) != "multi" or hasattr(estimator, "track_reports"):
         return estimator
-    identity = identity_config(world, uav)
+    identity = identity_config(world, uav, network)
     multi = _multi_config(uav)
     if isinstance(estimator, SingleTargetTracker):
         return MultiTargetTracker(estimator.config, multi, identity, model=estimator.model,

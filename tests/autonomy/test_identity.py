@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from autonomy.estimation.tracking.identity import (IdentityConfig, TargetIdentity, background_frequencies,
-                                                   class_log_likelihood_ratio)
+                                                   class_log_likelihood_ratio, track_evidence)
 from autonomy.sensing.measurement import ClassMeasurement
 
 # three colours; the target is colour 2; the background is 60 % colour 0, 30 % colour 1, 10 % colour 2
@@ -33,30 +33,41 @@ def test_class_reading_ratio_is_target_over_background_likelihood():
 
 def test_belief_after_readings_matches_bayes_by_hand():
     ident = TargetIdentity(_config(background_density=1e-3))
-    # no cue: a confirmed track's prior odds of being the target are its density ratio, here 1 (density = ρ)
+    # no cue: a new track is the target with likelihood ρ, as a background car is, so each birth gives the new
+    # hypothesis the weight of H_0: after two, H_1, H_2 and H_0 are equally likely
     ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    assert ident.probability(1) == pytest.approx(0.5)
     ident.confirmed(2, 0.0, np.ones(2) * 50, np.eye(2), evidence=0.0)
-    w1 = 0.5
-    w0 = 0.5
-    w2 = w0 * 0.5
-    w0 = w0 * 0.5
+    w1 = w2 = w0 = 1.0 / 3.0
     assert ident.probability(1) == pytest.approx(w1)
     assert ident.probability(2) == pytest.approx(w2)
     assert ident.w_none == pytest.approx(w0)
-    # track 2 reads the target's colour twice, track 1 reads colour 0 once
-    for track, observed in ((2, 2), (2, 2), (1, 0)):
-        lik = C[:, observed]
-        llr = class_log_likelihood_ratio("colour", lik, ident.config)
-        ident.read(track, llr)
-    l_b = lambda o: float(BG["colour"] @ C[:, o])  # noqa: E731
-    r2 = (C[2, 2] / l_b(2)) ** 2
-    r1 = C[2, 0] / l_b(0)
+    # track 2 reads the target's colour twice, track 1 reads colour 0 once; a car's class is drawn once, so the
+    # evidence of n readings is log(Π C[c_T, o_i] / Σ_c π(c) Π C[c, o_i])
+    ell2 = 2 * np.log(C[:, 2])
+    ell1 = np.log(C[:, 0])
+    ident.read(2, track_evidence({"colour": ell2}, ident.config))
+    ident.read(1, track_evidence({"colour": ell1}, ident.config))
+    r2 = C[2, 2] ** 2 / float(BG["colour"] @ C[:, 2] ** 2)
+    r1 = C[2, 0] / float(BG["colour"] @ C[:, 0])
     unnorm = {1: w1 * r1, 2: w2 * r2, 0: w0}
     total = sum(unnorm.values())
     assert ident.probability(1) == pytest.approx(unnorm[1] / total, rel=1e-12)
     assert ident.probability(2) == pytest.approx(unnorm[2] / total, rel=1e-12)
     assert ident.w_none == pytest.approx(unnorm[0] / total, rel=1e-12)
     assert ident.target() == 2
+
+
+def test_a_look_alike_seen_often_gains_at_most_one_over_its_class_frequency():
+    """However many readings of the target's class a background car gets, its evidence tends to log(1 / π(c_T))
+    (here perfect readings: exactly that)."""
+    cfg = _config()
+    perfect = np.eye(3)
+    for n in (1, 10, 100):
+        ell = n * np.log(np.maximum(perfect[:, 2], 1e-300))
+        assert track_evidence({"colour": ell}, cfg) == pytest.approx(math.log(1 / 0.1))
+    noisy = [track_evidence({"colour": n * np.log(C[:, 2])}, cfg) for n in (1, 5, 50)]
+    assert noisy[0] < noisy[1] < noisy[2] <= math.log(1 / 0.1) + 1e-12
 
 
 def test_cue_makes_the_track_at_the_cued_place_the_target():
@@ -74,6 +85,23 @@ def test_cue_makes_the_track_at_the_cued_place_the_target():
     ident.confirmed(8, 2.0, np.array([600.0, 0.0]), P, evidence=0.0)   # far away: almost certainly background
     assert ident.probability(8) < 1e-6
     assert ident.target() == 7
+
+
+def test_a_car_showing_up_nearer_the_cue_takes_the_belief_from_an_earlier_one():
+    """Bayes over births: under H_1 the second track is background (ρ), under H_0 it is the target (p_T(x_2))."""
+    rho = 1e-5
+    ident = TargetIdentity(_config(background_density=rho, search_speed=1e-6))
+    ident.cue(0.0, np.zeros(2), sigma_m=20.0)
+    P = np.eye(2) * 1e-6
+    S = np.eye(2) * 400.0
+    dens = lambda d: math.exp(-0.5 * d * d / 400.0) / (2 * math.pi * math.sqrt(np.linalg.det(S)))  # noqa: E731
+    ident.confirmed(1, 0.0, np.array([50.0, 0.0]), P, evidence=0.0)  # first, but 50 m from the cue
+    w1, w0 = dens(50.0) / rho, 1.0
+    assert ident.probability(1) == pytest.approx(w1 / (w1 + w0), rel=1e-6)
+    ident.confirmed(2, 0.0, np.array([5.0, 0.0]), P, evidence=0.0)   # later, 5 m from it
+    w2 = w0 * dens(5.0) / rho
+    assert ident.probability(2) == pytest.approx(w2 / (w1 + w2 + w0), rel=1e-6)
+    assert ident.target() == 2
 
 
 def test_lost_target_moves_the_search_centre_and_is_reacquired_nearby():

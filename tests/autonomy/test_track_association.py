@@ -45,16 +45,21 @@ def test_only_associated_tracks_fuse_into_the_target():
     np.testing.assert_allclose(out.estimate.p_W, f.x[:2])
 
 
-def test_teammates_evidence_moves_the_team_target():
-    """Own belief: track 1 at 0.45, track 2 at 0.35, none 0.2; a teammate's evidence log 4 on the car of track 2
-    makes the team's probabilities 0.45 : 1.4 : 0.2 (normalised), so track 2 is the target."""
+def test_the_team_target_is_the_linear_pool_of_the_members_beliefs():
+    """Own belief: track 1 at 0.45, track 2 at 0.35; a teammate holds the car of track 2 at 0.95 and nothing on
+    track 1's car: pooled (0.45 + 0) / 2 and (0.35 + 0.95) / 2 = 0.65, so track 2 is the team's target."""
     fusion = TeamTrackFusion("covariance_intersection", max_age_s=2.0, q=0.0)
     own = [_rep(1, 0, 0, p=0.45), _rep(2, 200, 0, p=0.35)]
-    mate = TrackPicture(t=10.0, tracks=(_rep(9, 201, 1, p=0.3, evidence=math.log(4.0)),), target_track_id=9)
+    mate = TrackPicture(t=10.0, tracks=(_rep(9, 201, 1, p=0.95),), target_track_id=9)
     out = fusion.fuse(10.0, own[0].estimate, own, 1, [mate])
     assert out.own_track_id == 2
-    assert out.probability == pytest.approx(1.4 / (0.45 + 1.4 + 0.2))
+    assert out.probability == pytest.approx((0.35 + 0.95) / 2)
     assert fusion.disagreements == 1
+    # a teammate's target on a car one does not hold competes with its pooled share
+    lone = TrackPicture(t=10.0, tracks=(_rep(4, 900, 0, p=1.0),), target_track_id=4)
+    out = fusion.fuse(10.0, own[0].estimate, [_rep(1, 0, 0, p=0.1)], 1, [lone])
+    assert out.own_track_id is None and out.probability == pytest.approx(1.0 / 2)
+    np.testing.assert_allclose(out.estimate.p_W, [900, 0])
 
 
 def test_stale_pictures_are_ignored_and_no_candidate_keeps_the_local_estimate():

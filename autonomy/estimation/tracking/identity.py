@@ -4,17 +4,23 @@ target is in no track", kept by Bayes' rule.
 Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` (it is in none of them) carry weights
 ``w_k``, ``w_0`` that sum to 1. What changes them:
 
-- **a class reading** (a :class:`~autonomy.sensing.measurement.ClassMeasurement`) on track k: under ``H_k`` its
-  likelihood is ``L_T = C[c_T, o]`` (the target's known class ``c_T``, the sensor's confusion ``C``, the reported
-  class ``o``); under every other hypothesis track k is a background car, ``L_B = Σ_c π(c) C[c, o]`` with the
-  background population's class frequencies ``π``. So ``w_k ← w_k · L_T / L_B`` and all weights are normalised. The
-  track keeps ``evidence = Σ log(L_T / L_B)`` of its own sensors' readings, which a teammate may add to its own belief;
-- **a confirmed new track** j (position ``x_j``, covariance ``P_j``, evidence ``E_j``) splits ``H_0``: if the target
-  is in no track, the new one is the target with probability
-  ``π_j = e^{E_j} p_T(x_j) / (e^{E_j} p_T(x_j) + ρ)``, where ``p_T = N(x_j; μ, Σ + P_j)`` is where the target is
-  believed to be while in no track (the cue, or the last target track's estimate, with ``Σ`` grown by
-  ``(search_speed · Δt)²`` per axis since then) and ``ρ`` the density of background cars that could start a track
-  (cars per m²). Then ``w_j = w_0 π_j`` and ``w_0 ← w_0 (1 − π_j)``;
+- **class readings** (:class:`~autonomy.sensing.measurement.ClassMeasurement`) on track k: a car's class is drawn
+  once and every reading of it is conditionally independent given that class, so the track keeps per attribute the
+  log-likelihood of its readings for every class, ``ℓ(c) = Σ_i log C_i[c, o_i]`` (the sensor's confusion ``C_i``,
+  the reported class ``o_i``). Under ``H_k`` the readings have likelihood ``exp ℓ(c_T)`` (the target's known class
+  ``c_T``); under every other hypothesis track k is a background car, of likelihood ``Σ_c π(c) exp ℓ(c)`` with the
+  background population's class frequencies ``π``. The track's evidence is ``E_k = Σ_attributes [ℓ(c_T) −
+  log Σ_c π(c) exp ℓ(c)]`` (:func:`track_evidence`) and ``w_k ∝ (continuity weight) · exp E_k``. Many readings of
+  a look-alike's class therefore raise its weight by at most ``1 / π(c_T)``, however often it is seen. A teammate
+  may add a track's evidence from the UAV's own sensors to its own belief;
+- **a confirmed new track** j (position ``x_j``, covariance ``P_j``, evidence ``E_j``): under every existing
+  hypothesis ``H_k`` (and under ``H_0`` too, if the target stays unseen) the new track is a background car, of
+  likelihood ``ρ`` (the density of background cars that could start a track, cars per m²); under ``H_0`` it may
+  instead be the target, of likelihood ``e^{E_j} p_T(x_j)``, where ``p_T = N(x_j; μ, Σ + P_j)`` is where the target
+  is believed to be while in no track (the cue, or the last target track's estimate, with ``Σ`` grown by
+  ``(search_speed · Δt)²`` per axis since then). So ``w_k ← w_k ρ``, ``w_j = w_0 e^{E_j} p_T(x_j)``,
+  ``w_0 ← w_0 ρ``, normalised: a car that shows up nearer the cue later (the target was stopped, or hidden) takes
+  the belief from one that showed up first but farther;
 - **a deleted track** k: ``w_0 ← w_0 + w_k``; if ``H_k`` was the likelier of the two, the track's last estimate
   becomes where the target is believed to be (so a lost target is re-acquired from the tracks born near where it was
   last seen, with the search region growing with time).
@@ -31,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "class_log_likelihood_ratio"]
+__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "class_log_likelihood_ratio",
+           "track_evidence"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -117,6 +124,22 @@ def class_log_likelihood_ratio(attribute: str, likelihood: np.ndarray, config: I
     return math.log(l_t / max(l_b, 1e-300))
 
 
+def track_evidence(loglik: Mapping[str, np.ndarray], config: IdentityConfig) -> float:
+    """``E = Σ_a [ℓ_a(c_T) − log Σ_c π_a(c) exp ℓ_a(c)]`` over the attributes the target has a class for, from a
+    track's per-class log-likelihoods ``loglik[attribute]`` of its readings (module docstring)."""
+    total = 0.0
+    for name, c_t in config.target_classes.items():
+        ell = loglik.get(name)
+        if ell is None:
+            continue
+        ell = np.asarray(ell, dtype=float)
+        bg = config.background.get(name)
+        freq = np.full(ell.size, 1.0 / ell.size) if bg is None else np.asarray(bg, dtype=float)
+        top = float(ell.max())
+        total += float(ell[c_t]) - (top + math.log(float(freq @ np.exp(ell - top))))
+    return max(min(total, 50.0), -50.0)
+
+
 class TargetIdentity:
     """The belief over which confirmed track is the designated target (module docstring).
 
@@ -129,6 +152,7 @@ class TargetIdentity:
     def __init__(self, config: IdentityConfig) -> None:
         self.config = config
         self.weights: dict[int, float] = {}
+        self.evidence: dict[int, float] = {}
         self.w_none = 1.0
         self.centre: SearchCentre | None = None
 
@@ -159,24 +183,29 @@ class TargetIdentity:
             d = np.asarray(p, dtype=float)[:2] - mean
             maha = float(d @ np.linalg.solve(S, d))
             density = math.exp(-0.5 * maha) / (2.0 * math.pi * math.sqrt(max(np.linalg.det(S), 1e-300)))
-        odds = math.exp(min(evidence, 50.0)) * density / self.config.background_density
-        share = odds / (1.0 + odds)
-        self.weights[track_id] = self.w_none * share
-        self.w_none *= 1.0 - share
+        odds = math.exp(min(evidence, 50.0)) * density / self.config.background_density  # relative to ρ
+        self.weights[track_id] = self.w_none * odds  # every other hypothesis keeps its weight × ρ / ρ
+        self.evidence[track_id] = min(evidence, 50.0)
         self._normalise()
 
-    def read(self, track_id: int, log_ratio: float) -> None:
-        """A class reading on track ``track_id`` with log-likelihood ratio ``log_ratio`` (target vs background)."""
-        if track_id not in self.weights or log_ratio == 0.0:
+    def read(self, track_id: int, evidence: float) -> None:
+        """Track ``track_id``'s class evidence is now ``evidence`` (:func:`track_evidence` of all its readings): its
+        weight changes by ``exp(evidence − previous evidence)``."""
+        if track_id not in self.weights:
             return
-        self.weights[track_id] *= math.exp(max(min(log_ratio, 50.0), -50.0))
-        self._normalise()
+        new = max(min(float(evidence), 50.0), -50.0)
+        change = new - self.evidence.get(track_id, 0.0)
+        self.evidence[track_id] = new
+        if change != 0.0:
+            self.weights[track_id] *= math.exp(change)
+            self._normalise()
 
     def deleted(self, track_id: int, t: float, p: np.ndarray, v: np.ndarray, P: np.ndarray) -> None:
         """Track ``track_id`` was dropped at ``t`` (s) with last estimate ``p`` (m), ``v`` (m/s), position
         covariance ``P`` (m²): its weight joins ``H_0``, and if it was likelier the target than ``H_0`` was, the
         search centre moves to its estimate."""
         w = self.weights.pop(track_id, None)
+        self.evidence.pop(track_id, None)
         if w is None:
             return
         if w > self.w_none:
@@ -189,6 +218,7 @@ class TargetIdentity:
     def merged(self, kept: int, dropped: int) -> None:
         """Track ``dropped`` was found to be a duplicate of ``kept``: ``kept`` takes its weight."""
         w = self.weights.pop(dropped, 0.0)
+        self.evidence.pop(dropped, None)
         if kept in self.weights:
             self.weights[kept] += w
         else:

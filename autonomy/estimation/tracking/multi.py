@@ -32,7 +32,7 @@ from autonomy.estimation.measurements import MeasurementLike
 from autonomy.estimation.models import MotionModel
 from interfaces.state import TargetEstimate, TrackReport
 
-from .identity import IdentityConfig, TargetIdentity, class_log_likelihood_ratio
+from .identity import IdentityConfig, TargetIdentity, track_evidence
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
 from .track import Track
@@ -245,21 +245,23 @@ class MultiTargetTracker:
 
     def _read_classes(self, track: Track, weighted: Sequence[tuple[float, MeasurementLike]],
                       none_weight: float = 0.0) -> None:
-        """Class readings of the detections that updated ``track`` (weights: association probabilities): the
-        likelihood ratio of the mixture ``β₀ + Σ βⱼ L_T,j / L_B,j``."""
-        cfg = self.identity.config
-        ratio, any_class = none_weight, False
+        """Class readings of the detections that updated ``track`` (weights: association probabilities, the
+        per-class likelihood of the scan being the mixture ``β₀ + Σ βⱼ C_j[c, o_j]``) into its per-class
+        log-likelihoods, and its evidence into the identity belief (:mod:`.identity`)."""
+        by_attr: dict[str, np.ndarray] = {}
         for w, det in weighted:
-            classes = getattr(det, "classes", ())
-            llr = sum(class_log_likelihood_ratio(c.attribute, c.likelihood(), cfg) for c in classes)
-            any_class = any_class or bool(classes)
-            ratio += w * np.exp(np.clip(llr, -50.0, 50.0))
-        if not any_class or ratio <= 0.0:
+            for c in getattr(det, "classes", ()):
+                lik = np.asarray(c.likelihood(), dtype=float)
+                by_attr[c.attribute] = by_attr.get(c.attribute, np.full(lik.size, none_weight)) + w * lik
+        if not by_attr:
             return
-        llr = float(np.log(ratio))
-        track.evidence += llr
+        for name, lik in by_attr.items():
+            prev = track.class_loglik.get(name)
+            step = np.log(np.maximum(lik, 1e-300))
+            track.class_loglik[name] = step if prev is None else prev + step
+        track.evidence = track_evidence(track.class_loglik, self.identity.config)
         if track.confirmed:
-            self.identity.read(track.track_id, llr)
+            self.identity.read(track.track_id, track.evidence)
 
     def _confirmations(self, live: Sequence[Track], hit: set[int], t_meas: float) -> None:
         m, n = self.multi.confirm_m, self.multi.confirm_n

@@ -35,7 +35,10 @@ class Track:
     confirmed : bool
         Whether the track passed its confirmation logic (a single-target tracker's tracks are born confirmed).
     evidence : float
-        Sum of the log-likelihood ratios (target vs background car) of the class readings that updated the track.
+        Log-likelihood ratio (the designated target vs a background car) of the class readings that updated the
+        track (:func:`~.identity.track_evidence`).
+    class_loglik : dict[str, np.ndarray]
+        Per attribute, the log-likelihood of those readings for every class.
     """
 
     def __init__(self, filter: Filter, last_update_t: float, *, track_id: int = 0, hits: int = 1, scans: int = 1,
@@ -48,6 +51,7 @@ class Track:
         self.scans = int(scans)
         self.confirmed = bool(confirmed)
         self.evidence = 0.0
+        self.class_loglik: dict = {}
 
     def __repr__(self) -> str:
         return (f"Track(id={self.track_id}, t={self.filter.t:.3f}, last_update_t={self.last_update_t:.3f}, "

@@ -11,13 +11,16 @@ older than ``max_age_s``:
    pairs are one car;
 3. the team's belief of which car is the target is the linear opinion pool of the members' beliefs: one's own
    track k has team probability ``(p_k + Σ_j p_j) / n``, its own target probability plus those of the teammates'
-   tracks assigned to it, over the ``n`` UAVs whose pictures are in (oneself included); a teammate's track assigned
-   to none of one's own has ``p_j / n``. An average of beliefs counts no evidence twice (each member's belief already
+   tracks assigned to it, over the ``n`` UAVs whose pictures are in (oneself included). A car only a teammate holds
+   is, in one's own belief, part of "the target is in none of my tracks" (``p_0``), which one shares out as the
+   teammate does: its track j has ``p_j (1 + p_0) / n``, and "in no track" keeps ``p_0 (1 − Σ_loose p_j)`` of
+   one's own share. An average of beliefs counts no evidence twice (each member's belief already
    holds its own cue, continuity and class readings), so a UAV that has not yet told the target from a look-alike
    follows a teammate that has;
-4. the most probable candidate, if its probability is at least ``min_probability``, is the target: its estimate is
-   fused (convex or covariance intersection) with every teammate track assigned to it. Otherwise the UAV's own
-   estimate stands (its target track, or where it searches).
+4. the most probable candidate is the target if it is more probable than "the target is in no track" (whose pooled
+   probability is the average of ``1 − Σ p`` over the members) and reaches ``min_probability`` (default 0: the
+   maximum a posteriori choice); its estimate is fused (convex or covariance intersection) with every teammate track
+   assigned to it. Otherwise the UAV's own estimate stands (its target track, or where it searches).
 """
 
 from __future__ import annotations
@@ -94,11 +97,11 @@ class TeamTrackFusion:
     gate_probability : float
         Probability of the association gate, in (0, 1).
     min_probability : float
-        Team probability the target candidate needs, in (0, 1].
+        Team probability the target candidate needs besides beating "in no track", in [0, 1].
     """
 
     def __init__(self, method: str, max_age_s: float, q: float, gate_probability: float = 0.999,
-                 min_probability: float = 0.5) -> None:
+                 min_probability: float = 0.0) -> None:
         if method not in ("convex", "covariance_intersection"):
             raise ValueError(f"TeamTrackFusion.method must be convex|covariance_intersection, got {method!r}")
         if not 0 < gate_probability < 1:
@@ -118,6 +121,7 @@ class TeamTrackFusion:
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
         own_est = [predict_estimate(r.estimate, t, self.q) for r in mine]
         pooled = np.array([r.target_probability for r in mine], dtype=float)
+        none = max(0.0, 1.0 - float(pooled.sum()))
         fused_parts: list[list[TargetEstimate]] = [[] for _ in mine]
         loose: list[tuple[float, TargetEstimate]] = []
         members = 1
@@ -125,6 +129,7 @@ class TeamTrackFusion:
             if not 0.0 <= t - pic.t <= self.max_age_s:
                 continue
             members += 1
+            none += max(0.0, 1.0 - sum(r.target_probability for r in pic.tracks))
             theirs = [r for r in pic.tracks if r.estimate.P is not None]
             their_est = [predict_estimate(r.estimate, t, self.q) for r in theirs]
             pairs = associate_tracks(own_est, their_est, self.threshold)
@@ -136,11 +141,14 @@ class TeamTrackFusion:
                 taken.add(j)
             loose.extend((theirs[j].target_probability, their_est[j]) for j in range(len(theirs))
                          if j not in taken and theirs[j].target_probability > 0.0)
+        own_none = max(0.0, 1.0 - sum(r.target_probability for r in mine))
+        none += own_none * max(0.0, 1.0 - sum(p for p, _ in loose)) - own_none  # one's own share of "no track"
         best_own = int(np.argmax(pooled)) if len(pooled) else -1
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
         p_own = float(pooled[best_own]) / members if best_own >= 0 else 0.0
-        p_loose = loose[best_loose][0] / members if best_loose >= 0 else 0.0
-        if max(p_own, p_loose) < self.min_probability:
+        p_loose = loose[best_loose][0] * (1.0 + own_none) / members if best_loose >= 0 else 0.0
+        best = max(p_own, p_loose)
+        if best < self.min_probability or best <= none / members:
             return TeamTarget(estimate=local, probability=max(p_own, p_loose), own_track_id=None, fused_with=0)
         if p_own >= p_loose:
             track_id = mine[best_own].track_id

@@ -55,10 +55,11 @@ def test_the_team_target_is_the_linear_pool_of_the_members_beliefs():
     assert out.own_track_id == 2
     assert out.probability == pytest.approx((0.35 + 0.95) / 2)
     assert fusion.disagreements == 1
-    # a teammate's target on a car one does not hold competes with its pooled share
-    lone = TrackPicture(t=10.0, tracks=(_rep(4, 900, 0, p=1.0),), target_track_id=4)
+    # a car only the teammate holds (its belief 0.8) takes one's own "in none of my tracks" (0.9) shared out as the
+    # teammate does: (0.8 + 0.9 · 0.8) / 2 = 0.76, against "in no track" (0.9 · 0.2 + 0.2) / 2 = 0.19
+    lone = TrackPicture(t=10.0, tracks=(_rep(4, 900, 0, p=0.8),), target_track_id=4)
     out = fusion.fuse(10.0, own[0].estimate, [_rep(1, 0, 0, p=0.1)], 1, [lone])
-    assert out.own_track_id is None and out.probability == pytest.approx(1.0 / 2)
+    assert out.own_track_id is None and out.probability == pytest.approx((0.8 + 0.9 * 0.8) / 2)
     np.testing.assert_allclose(out.estimate.p_W, [900, 0])
 
 

@@ -266,3 +266,14 @@ def test_gnn_keeps_crossing_identities():
     with σ = 3 m about one run in ten does: the test can fail)."""
     kept = [crossing_run(seed, angle_deg=20.0, sigma=2.0) for seed in range(50)]
     assert all(kept), f"swapped in seeds {[s for s, k in enumerate(kept) if not k]}"
+
+
+@pytest.mark.parametrize("n_tracks,n_dets", [(3, 0), (0, 3), (0, 0)])
+def test_gnn_with_no_tracks_or_no_detections(n_tracks, n_dets):
+    m = MODELS["cv"]
+    tracks = random_tracks(m, np.random.default_rng(0), n_tracks)
+    dets = random_scan("box", np.random.default_rng(1), n_dets, np.zeros(3))
+    a = GlobalNearestNeighbourAssociator(ChiSquareGate(0.99), PredictedNis(m, 0.0)).assign(tracks, dets)
+    assert a.pairs == ()
+    assert a.unused == a.gated_out == tuple(range(n_dets))
+    assert a.costs.shape == (n_tracks, n_dets)

@@ -187,3 +187,32 @@ def test_pda_update_is_the_kalman_pda():
 def test_pda_update_checks_betas(betas):
     with pytest.raises(ValueError, match="betas"):
         pda_update(track_at(0.0, 0.0).filter, [box([0.0, 0.0])] * (len(betas) - 1), betas)
+
+
+def test_pda_update_on_an_imm_moment_matches_the_updated_copies():
+    """Any filter: two IMMs (CV and CT modes) updated on deep copies, their moments combined and set back."""
+    from autonomy.estimation.imm import IMM
+    from autonomy.estimation.models import CoordinatedTurn
+
+    def imm() -> IMM:
+        x0, P0 = np.array([1.0, 2.0, 2.0, -1.0]), np.diag([4.0, 1.0, 4.0, 1.0])
+        return IMM([make_filter("ekf", MODEL, x0, P0), make_filter("ekf", CoordinatedTurn(omega=0.2, q=0.5), x0, P0)],
+                   np.array([[0.9, 0.1], [0.1, 0.9]]))
+
+    dets = [box([2.0, 1.0], t=0.5, r=2.0), box([1.0, 3.0], t=0.5, r=2.0)]
+    betas = np.array([0.1, 0.6, 0.3])
+    f = imm()
+    parts = []
+    for j in range(3):
+        g = imm()
+        if j:
+            g.update(dets[j - 1])
+        else:
+            g.predict(0.5)
+        parts.append((g.x, g.P))
+    x = sum(b * xj for b, (xj, _) in zip(betas, parts, strict=True))
+    P = sum(b * (Pj + np.outer(xj - x, xj - x)) for b, (xj, Pj) in zip(betas, parts, strict=True))
+    pda_update(f, dets, betas)
+    np.testing.assert_allclose(f.x, x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(f.P, P, rtol=1e-10, atol=1e-12)
+    assert f.t == 0.5

@@ -5,10 +5,12 @@ against every track at once (:class:`~.scan_gate.ScanGating`) and assigned by on
 at most one detection of the group, each detection goes to at most one track, a pair outside the gate is never
 assigned, and the total cost ``Σ −2 log N(νᵢⱼ; 0, Sᵢⱼ)`` of the pairs plus the cost of the tracks left without a
 detection is least. The problem is the rectangular assignment of the gated cost matrix augmented with one "no
-detection" column per track (its own miss cost on the diagonal, ``inf`` off it), solved by
-``scipy.optimize.linear_sum_assignment`` on each connected component ("cluster") of the bipartite gating graph in
-turn: components share no track and no detection, so their optimal assignments are independent, and a sparse gate
-makes each small.
+detection" column per track (its own miss cost on the diagonal, ``inf`` off it), solved on each connected component
+("cluster") of the bipartite gating graph in turn: components share no track and no detection, so their optimal
+assignments are independent, and a sparse gate makes each small. A component of one track or one detection is solved
+directly, one of at most ``max_enumerated`` feasible assignments by exhaustive search in compiled code, a larger one
+by ``scipy.optimize.linear_sum_assignment`` (all three optimal; the first two avoid the solver's call cost on the
+many small components).
 
 A track's miss cost is ``miss_cost`` when given, else the largest cost a detection on the boundary of the track's
 gate would have (``χ²_m(p) + log det(2πSᵢⱼ)`` over its gated detections): with it a gated detection is never worse

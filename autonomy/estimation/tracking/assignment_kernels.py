@@ -10,12 +10,40 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["radar_terms", "position_terms", "inv_logdet", "gate_pairs", "gate_all_pairs", "pair_clusters",
-           "gnn_clusters", "cluster_matrix", "enumerate_events", "jpda_clusters"]
+__all__ = ["predict_linear", "radar_terms", "position_terms", "inv_logdet", "gate_pairs", "gate_all_pairs",
+           "pair_clusters", "gnn_clusters", "cluster_matrix", "enumerate_events", "jpda_clusters"]
 
 _TWO_PI = 2.0 * math.pi
 _LOG_2PI = math.log(2.0 * math.pi)
 _LIMIT_REL = 1e-9  # relative widening of a component bound against round-off
+
+
+@numba.njit(cache=True)
+def predict_linear(X, P, F, Q):
+    """``F xᵢ`` and ``F Pᵢ Fᵀ + Q`` of a stack of states ``(T, n)`` and covariances ``(T, n, n)``."""
+    T, n = X.shape
+    Xo = np.zeros((T, n))
+    Po = np.empty((T, n, n))
+    FP = np.empty((n, n))
+    for t in range(T):
+        for a in range(n):
+            s = 0.0
+            for k in range(n):
+                s += F[a, k] * X[t, k]
+            Xo[t, a] = s
+        for a in range(n):
+            for b in range(n):
+                s = 0.0
+                for k in range(n):
+                    s += F[a, k] * P[t, k, b]
+                FP[a, b] = s
+        for a in range(n):
+            for b in range(n):
+                s = 0.0
+                for k in range(n):
+                    s += FP[a, k] * F[b, k]
+                Po[t, a, b] = s + Q[a, b]
+    return Xo, Po
 
 
 @numba.njit(cache=True)
@@ -131,9 +159,12 @@ def _gate(ti, dj, every, Z, Zp, S, S_inv, logdet, ang, gamma):
     nis = np.empty(n)
     cost = np.empty(n)
     c = 0
+    i, j = 0, -1
     for p in range(n):
-        if every:
-            i, j = p // D, p % D
+        if every:  # row-major, without a division per pair
+            j += 1
+            if j == D:
+                i, j = i + 1, 0
         else:
             i, j = ti[p], dj[p]
         inside = True
@@ -381,7 +412,7 @@ def enumerate_events(W, max_events, beta):
 
 @numba.njit(cache=True)
 def jpda_clusters(rows, cols, log_ratio, log_miss, order, starts, n_t, n_d, max_events):
-    """JPDA marginals of every component by :func:`_enumerate`: β ``(n_t, n_d + 1)`` (rows of tracks without a
+    """JPDA marginals of every component by :func:`enumerate_events`: β ``(n_t, n_d + 1)`` (rows of tracks without a
     gated detection are ``[1, 0, …]``) and the components that exceeded ``max_events`` (their rows left as is)."""
     beta = np.zeros((n_t, n_d + 1))
     beta[:, 0] = 1.0

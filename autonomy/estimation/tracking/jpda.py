@@ -9,9 +9,10 @@ space), its weight is
 
 (Bar-Shalom, Daum and Huang 2009, the parametric JPDA), and the marginal association probabilities are
 ``βᵢⱼ = Σ_{e ∋ (i, j)} w(e) / Σ_e w(e)``, ``βᵢ₀ = Σ_{e: i missed} w(e) / Σ_e w(e)``. Events of different connected
-components ("clusters") of the gating graph are independent, so each cluster is enumerated alone, exhaustively,
-track by track (the partial events of the tracks so far, each extended by a miss or by any gated detection not yet
-taken).
+components ("clusters") of the gating graph are independent, so each cluster is enumerated alone, exhaustively, by a
+depth-first search over its tracks (each extended by a miss or by any gated detection not yet taken), in compiled
+code (:func:`~.assignment_kernels.enumerate_events`). Each track's options are scaled by one common factor first (the
+largest of them), which leaves every β unchanged and keeps the products in range.
 
 When a cluster would have more than ``max_cluster_events`` events the enumeration stops and the cluster's weights
 come from Fitzgerald's cheap JPDA (Fitzgerald 1985): with ``Lᵢⱼ`` the likelihood ratios above, ``Tᵢ = Σⱼ Lᵢⱼ`` and
@@ -59,7 +60,8 @@ class JointProbabilisticAssociator:
     max_cluster_events : int
         Largest number of joint events enumerated in one cluster (>= 1); beyond it the cheap-JPDA approximation.
     kdtree_min_pairs : int
-        From how many pairs radar and position detections are pre-gated with a k-d tree (:class:`~.scan_gate.ScanGating`).
+        From how many pairs radar and position detections are pre-gated with a k-d tree
+        (:class:`~.scan_gate.ScanGating`).
 
     Attributes
     ----------

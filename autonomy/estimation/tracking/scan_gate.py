@@ -9,10 +9,11 @@ model, its ``gating_filter``) and the same linearisation. The work is shared:
    ``propagate = F(dt)·x``, ``Q`` a function of ``dt`` alone) all tracks of one ``dt`` are predicted in one batched
    product ``F X``, ``F P Fᵀ + Q``;
 2. detections that share their model, sensor position and velocity, and ``R`` (a radar's scan) form a **batch**:
-   ``h(x̂ᵢ)``, ``Hᵢ`` and ``Sᵢ = Hᵢ Pᵢ Hᵢᵀ + R`` are evaluated once per track (vectorised over tracks for the radar
-   ``[r, az(, el)]`` and position models, one call per track otherwise), and the NIS of each pair is then one
-   quadratic form. A detection that shares nothing (a stacked measurement, its own sensor position) is a batch of one:
-   the exact per-pair computation;
+   ``h(x̂ᵢ)``, ``Hᵢ`` and ``Sᵢ = Hᵢ Pᵢ Hᵢᵀ + R`` are evaluated once per track (in compiled loops for the radar
+   ``[r, az(, el)]`` and position models, :mod:`.assignment_kernels`; by the bound model's ``h`` and ``jacobian``,
+   once per track, for any other), and the NIS of each pair is then one quadratic form (angle components wrapped as
+   the model's ``residual`` wraps them). A detection that shares nothing (a stacked measurement, its own sensor
+   position) is a batch of one: the exact per-pair computation;
 3. **spatial pre-gating**: for radar and position batches (their models fix a ground position,
    :meth:`~autonomy.estimation.measurements.DetectionModel.ground_fix`), only the pairs whose ground fix lies within
    a radius of a point of the track are evaluated, found with a ``cKDTree`` on the fixes. The radius is an exact
@@ -29,7 +30,9 @@ model, its ``gating_filter``) and the same linearisation. The work is shared:
      ``(r, az)`` to the ground is bounded exactly, where the first-order radius ``√(γ(λ_max(P_xy) + λ_max(P_fix)))``
      can miss a gated pair far from the linear regime (a near-nadir range, a wide gate).
 
-   The radius is widened by a relative 1e-7 and 1 µm against round-off.
+   The radius is widened by a relative 1e-7 and 1 µm against round-off. The tree pays off from some ten thousand
+   pairs (``kdtree_min_pairs``); below, every pair goes to the compiled loop, which rejects it on the first
+   component beyond ``√(γ Sₖₖ)`` — the same exact bound, in measurement space — before its quadratic form.
 """
 
 from __future__ import annotations
@@ -125,6 +128,7 @@ class ScanGating:
         cost = np.full((n_t, n_d), np.inf)
         dof = np.zeros(n_d, dtype=int)
         evaluated = 0
+        found: list[tuple[np.ndarray, np.ndarray]] = []
         if n_d:
             t_meas = float(detections[0].t_meas)
             if any(d.t_meas != t_meas for d in detections):
@@ -134,8 +138,15 @@ class ScanGating:
                 dets = [detections[j] for j in idx]
                 dof[idx] = np.size(dets[0].z)
                 if pred is not None:
-                    evaluated += self._gate_batch(pred, dets, np.asarray(idx), nis, cost)
-        rows, cols = np.nonzero(nis < np.inf)
+                    evaluated += self._gate_batch(pred, dets, np.asarray(idx), nis, cost, found)
+        if not found:
+            rows = cols = np.zeros(0, dtype=np.int64)
+        elif len(found) == 1 and found[0][2]:
+            rows, cols = found[0][:2]
+        else:
+            rows, cols = np.concatenate([f[0] for f in found]), np.concatenate([f[1] for f in found])
+            order = np.lexsort((cols, rows))
+            rows, cols = rows[order], cols[order]
         return GatedCosts(nis=nis, cost=cost, dof=dof, rows=rows, cols=cols, evaluated=evaluated)
 
     # --- prediction ---------------------------------------------------------------------------------------------
@@ -146,16 +157,17 @@ class ScanGating:
         X = np.empty((len(filters), n))
         P = np.empty((len(filters), n, n))
         if isinstance(model, LinearMotionModel):
-            by_dt: dict[float, list[int]] = {}
-            for i, f in enumerate(filters):
-                X[i] = f.x
-                P[i] = f.P
-                by_dt.setdefault(t - f.t, []).append(i)
-            for dt, idx in by_dt.items():
+            X[:] = [f.x for f in filters]
+            P[:] = [f.P for f in filters]
+            dts = t - np.array([f.t for f in filters])
+            if dts.size and np.all(dts == dts[0]):
+                groups = [(float(dts[0]), slice(None))]
+            else:
+                values, inverse = np.unique(dts, return_inverse=True)
+                groups = [(float(v), np.flatnonzero(inverse == k)) for k, v in enumerate(values)]
+            for dt, sel in groups:
                 F, Q = model.matrices(dt)
-                sel = slice(None) if len(idx) == len(filters) else idx
-                X[sel] = X[sel] @ F.T
-                P[sel] = F @ P[sel] @ F.T + Q
+                X[sel], P[sel] = kernels.predict_linear(X[sel], P[sel], F, Q)
         else:
             for i, f in enumerate(filters):
                 dt = t - f.t
@@ -166,7 +178,9 @@ class ScanGating:
 
     # --- one batch of detections sharing h, H and R per track -----------------------------------------------------
     def _gate_batch(self, pred: _Predicted, dets: list[MeasurementLike], idx: np.ndarray, nis: np.ndarray,
-                    cost: np.ndarray) -> int:
+                    cost: np.ndarray, found: list) -> int:
+        """Fill ``nis`` and ``cost`` at the batch's gated pairs; append ``(rows, cols, row-major)`` to ``found``; return
+        the number of pairs evaluated."""
         d0 = dets[0]
         h = d0.model.bind(d0, self.distance.layout, self.distance.target_height)
         R = np.ascontiguousarray(d0.R, dtype=float)
@@ -193,8 +207,10 @@ class ScanGating:
         else:
             rows, cols, q, c = kernels.gate_pairs(pairs[0], pairs[1], Z, Zp, S, S_inv, logdet, ang, gamma)
             evaluated = int(pairs[0].size)
-        nis[rows, idx[cols]] = q
-        cost[rows, idx[cols]] = c
+        cols = idx[cols]
+        nis[rows, cols] = q
+        cost[rows, cols] = c
+        found.append((rows, cols, pairs is None and bool(np.all(np.diff(idx) == 1))))
         return evaluated
 
     def _candidates(self, h: MeasurementModel, d0: MeasurementLike, Z: np.ndarray, Zp: np.ndarray, S: np.ndarray,
@@ -220,20 +236,21 @@ class ScanGating:
 
 def _batches(dets: Sequence[MeasurementLike]) -> list[list[int]]:
     """Indices of the detections that share model, sensor position and velocity, and ``R``."""
+    d0 = dets[0]
+    if not any(hasattr(d, "parts") for d in dets) and all(d.model is d0.model for d in dets) and all(
+            getattr(d, "v_sensor_W", None) is None for d in dets):  # one sensor's scan: compare in bulk
+        p = np.array([d.p_sensor_W for d in dets], dtype=float)
+        R = np.array([d.R for d in dets], dtype=float)
+        if np.all(p == p[0]) and np.all(R == R[0]):
+            return [list(range(len(dets)))]
     out: dict[object, list[int]] = {}
-    last_key: object = None
-    last: tuple = ()
     for j, d in enumerate(dets):
         if hasattr(d, "parts"):  # a stacked measurement: its model is built per call
             out[("own", j)] = [j]
             continue
-        p, R, v = _bytes(d.p_sensor_W), d.R, getattr(d, "v_sensor_W", None)
-        if last and d.model is last[0] and R is last[2] and v is last[3] and p == last[1]:
-            out[last_key].append(j)  # the common case: a sensor's scan shares its R and model objects
-            continue
-        key = (id(d.model), p, None if v is None else _bytes(v), _bytes(R))
+        v = getattr(d, "v_sensor_W", None)
+        key = (id(d.model), _bytes(d.p_sensor_W), None if v is None else _bytes(v), _bytes(d.R))
         out.setdefault(key, []).append(j)
-        last_key, last = key, (d.model, p, R, v)
     return list(out.values())
 
 

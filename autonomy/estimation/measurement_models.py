@@ -71,6 +71,20 @@ class MeasurementModel(ABC):
         """``(h(x), ∂h/∂x)`` at one state (models override it to share the geometry between the two)."""
         return self.h(x), self.jacobian(x)
 
+    def linearise_batch(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(h, ∂h/∂x)`` at each row of ``X`` (n, n_state): shapes ``(n, len(z))`` and ``(n, len(z), n_state)``;
+        the rows' :meth:`linearise`, stacked (models override it with array arithmetic)."""
+        out = [self.linearise(x) for x in X]
+        return np.array([z for z, _ in out]), np.array([H for _, H in out])
+
+    def residual_batch(self, Z: np.ndarray, Z_pred: np.ndarray) -> np.ndarray:
+        """:meth:`residual` of each row of ``Z`` (n, len(z)) against ``Z_pred``."""
+        nu = Z - Z_pred
+        idx = np.flatnonzero(self.angle_mask)
+        if idx.size:
+            nu[:, idx] = (nu[:, idx] + np.pi) % TWO_PI - np.pi
+        return nu
+
     def residual(self, z: np.ndarray, z_pred: np.ndarray) -> np.ndarray:
         """``z − z_pred`` with angle components wrapped to ``[−π, π)``."""
         nu = z - z_pred
@@ -174,6 +188,28 @@ class RadarModel(_Geometric):
         rho = math.sqrt(rho2)
         r2 = rho2 + dz * dz
         return self._jacobian(dx, dy, dz, rho2, rho, r2, math.sqrt(r2), x)
+
+    def linearise_batch(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.m == 4:
+            return super().linearise_batch(X)
+        dx, dy, dz = self._d(X.T)
+        rho2 = dx * dx + dy * dy
+        rho = np.sqrt(rho2)
+        r2 = rho2 + dz * dz
+        r = np.sqrt(r2)
+        Z = np.stack([r, np.arctan2(dy, dx)] + ([np.arctan2(dz, rho)] if self.m == 3 else []), axis=1)
+        H = np.zeros((X.shape[0], self.m, self.n_state))
+        ix, iy = self.pos[0], self.pos[1]
+        H[:, 0, ix], H[:, 0, iy] = dx / r, dy / r
+        H[:, 1, ix], H[:, 1, iy] = -dy / rho2, dx / rho2
+        if self.has_z:
+            H[:, 0, self.pos[2]] = dz / r
+        if self.m == 3:
+            c = -dz / (rho * r2)
+            H[:, 2, ix], H[:, 2, iy] = c * dx, c * dy
+            if self.has_z:
+                H[:, 2, self.pos[2]] = rho / r2
+        return Z, H
 
     def _jacobian(self, dx: float, dy: float, dz: float, rho2: float, rho: float, r2: float, r: float,
                   x: np.ndarray) -> np.ndarray:

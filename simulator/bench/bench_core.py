@@ -191,3 +191,37 @@ def bench_campaign() -> list[BenchRecord]:
     return [BenchRecord(name="road_standoff_campaign_100_runs_min", value=wall / waves * math.ceil(100 / workers) / 60,
                         unit="min", better="lower"),
             BenchRecord(name="campaign_run_overhead_ratio", value=wall / ideal, unit="x", better="lower")]
+
+
+@benchmark("traffic_rtf", produces=("road_standoff_traffic_rtf", "road_standoff_traffic_alone_rtf",
+                                    "road_standoff_traffic_autonomy_share", "road_standoff_traffic_alone_autonomy_share",
+                                    "traffic_autonomy_share_growth", "traffic_rtf_ratio"))
+def bench_traffic_rtf() -> list[BenchRecord]:
+    """``road_standoff_traffic`` as shipped (24 kinematic traffic cars; 60 s) alternating with the same world without
+    its traffic (the same UAVs, sensors and multi-target tracker), 3 runs each, so both see the same load of a shared
+    machine: their real-time factors, the autonomy's share of each run's loop (the agents' phase: tracking, identity,
+    track association and fusion, NMPC) and the median over the pairs of the traffic run's share over the other's
+    (target: below 2, the autonomy's share less than doubles from no traffic to 24 cars) and of its real-time factor
+    over the other's. ``road_standoff_rtf`` (``world_rtf``) is the paper's world without traffic, for comparison."""
+    from simulator.reproduce.paper_002_traffic import _world_overrides
+
+    alone = _world_overrides("alone")
+    ref, var = [], []
+    for _ in range(3):
+        ref.append(_world_rtf("road_standoff_traffic", duration=60.0, overrides=alone))
+        var.append(_world_rtf("road_standoff_traffic", duration=60.0))
+    med = statistics.median
+    share = lambda r: r[1] / r[2]  # noqa: E731 - the loop's wall time over the autonomy's: autonomy / loop
+    return [
+        BenchRecord(name="road_standoff_traffic_rtf", value=med(v[0] for v in var), unit="x", better="higher"),
+        BenchRecord(name="road_standoff_traffic_alone_rtf", value=med(r[0] for r in ref), unit="x", better="higher"),
+        BenchRecord(name="road_standoff_traffic_autonomy_share", value=med(share(v) for v in var), unit="",
+                    better="lower"),
+        BenchRecord(name="road_standoff_traffic_alone_autonomy_share", value=med(share(r) for r in ref), unit="",
+                    better="lower"),
+        BenchRecord(name="traffic_autonomy_share_growth",
+                    value=med(share(v) / share(r) for r, v in zip(ref, var, strict=True)), unit="x", target=2.0,
+                    better="lower"),
+        BenchRecord(name="traffic_rtf_ratio", value=med(v[0] / r[0] for r, v in zip(ref, var, strict=True)),
+                    unit="x", better="higher"),
+    ]

@@ -26,12 +26,14 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from autonomy.estimation.base import Filter
 from autonomy.estimation.measurements import MeasurementLike
 from autonomy.estimation.models import MotionModel
 from interfaces.state import TargetEstimate, TrackReport
 
+from .batch_update import update_pairs
 from .identity import IdentityConfig, TargetIdentity, track_evidence
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -210,12 +212,17 @@ class MultiTargetTracker:
         self.gated_out += len(result.gated_out)
         hit: set[int] = set()
         if result.weights is None:
-            for i, j in result.pairs:
-                track, det = live[i], result.detections[j]
-                track.filter.update(det)
-                self._read_classes(track, [(1.0, det)])
+            pairs = [(live[i], result.detections[j]) for i, j in result.pairs]
+            update_pairs([(tr.filter, det) for tr, det in pairs], self.layout, self.config.target_height)
+            for track, det in pairs:
+                if getattr(det, "classes", ()):
+                    self._read_classes(track, [(1.0, det)])
                 self._updated(track, det, t_meas)
                 hit.add(id(track))
+            if pairs:
+                sid = pairs[0][1].sensor_id  # one scan: one sensor
+                self.updates += len(pairs)
+                self.used_by_sensor[sid] = self.used_by_sensor.get(sid, 0) + len(pairs)
         else:
             from .jpda import pda_update
 
@@ -228,6 +235,9 @@ class MultiTargetTracker:
                                    none_weight=float(W[i, 0]))
                 j = int(np.argmax(W[i, 1:]))
                 self._updated(track, result.detections[j], t_meas)
+                self.updates += 1
+                sid = result.detections[j].sensor_id
+                self.used_by_sensor[sid] = self.used_by_sensor.get(sid, 0) + 1
                 if W[i, 0] < 0.5:
                     hit.add(id(track))
         if fixing:
@@ -239,9 +249,11 @@ class MultiTargetTracker:
     def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
         track.last_update_t = t_meas
         track.missed = 0
-        self._step_detections.setdefault(track.track_id, []).append(det)
-        self.updates += 1
-        self.used_by_sensor[det.sensor_id] = self.used_by_sensor.get(det.sensor_id, 0) + 1
+        got = self._step_detections.get(track.track_id)
+        if got is None:
+            self._step_detections[track.track_id] = [det]
+        else:
+            got.append(det)
 
     def _read_classes(self, track: Track, weighted: Sequence[tuple[float, MeasurementLike]],
                       none_weight: float = 0.0) -> None:
@@ -308,14 +320,16 @@ class MultiTargetTracker:
         if len(confirmed) < 2:
             return
         p = np.array([tr.filter.x[self._ix] for tr in confirmed])
-        v = np.array([tr.filter.x[self._iv] for tr in confirmed])
-        close = np.linalg.norm(p[:, None] - p[None], axis=-1) < self.multi.merge_distance_m
-        close &= np.linalg.norm(v[:, None] - v[None], axis=-1) < self.multi.merge_speed_mps
-        np.fill_diagonal(close, False)
+        close = cKDTree(p).query_pairs(self.multi.merge_distance_m, output_type="ndarray")
+        if not len(close):
+            return
         gone: set[int] = set()
-        for a, b in zip(*np.nonzero(np.triu(close)), strict=True):
+        for a, b in sorted(map(tuple, close.tolist())):
             ta, tb = confirmed[a], confirmed[b]
             if id(ta) in gone or id(tb) in gone:
+                continue
+            dv = ta.filter.x[self._iv] - tb.filter.x[self._iv]
+            if float(np.hypot(dv[0], dv[1])) >= self.multi.merge_speed_mps:
                 continue
             keep, drop = (ta, tb) if ta.track_id < tb.track_id else (tb, ta)
             self.identity.merged(keep.track_id, drop.track_id)

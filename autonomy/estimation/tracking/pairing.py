@@ -72,7 +72,7 @@ class PairingInitiator:
         self._t, self._xy, self._sd = self._t[keep], self._xy[keep], self._sd[keep]
         self._P = [P for P, k in zip(self._P, keep, strict=True) if k]
         xy = np.array([f[1] for f in fixes], dtype=float).reshape(-1, 2)
-        sd = np.array([np.sqrt(np.linalg.eigvalsh(f[2]).max()) for f in fixes])
+        sd = np.array([_largest_sd(f[2]) for f in fixes])
         new: list[Track] = []
         paired_old: set[int] = set()
         paired_new: set[int] = set()
@@ -102,3 +102,9 @@ class PairingInitiator:
         self._sd = np.concatenate([self._sd[keep_old], sd[lone]])
         self._P = [P for P, k in zip(self._P, keep_old, strict=True) if k] + [fixes[i][2] for i in lone]
         return new
+
+
+def _largest_sd(P: np.ndarray) -> float:
+    """Square root of the largest eigenvalue of the 2×2 covariance ``P`` (m), in closed form."""
+    a, b, d = float(P[0, 0]), 0.5 * float(P[0, 1] + P[1, 0]), float(P[1, 1])
+    return float(np.sqrt(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)))

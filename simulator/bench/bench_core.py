@@ -194,8 +194,9 @@ def bench_campaign() -> list[BenchRecord]:
 
 
 @benchmark("traffic_rtf", produces=("road_standoff_traffic_rtf", "road_standoff_traffic_alone_rtf",
-                                    "road_standoff_traffic_autonomy_share", "road_standoff_traffic_alone_autonomy_share",
-                                    "traffic_autonomy_share_growth", "traffic_rtf_ratio"))
+                                    "road_standoff_traffic_autonomy_share",
+                                    "road_standoff_traffic_alone_autonomy_share", "traffic_autonomy_share_growth",
+                                    "traffic_rtf_ratio"))
 def bench_traffic_rtf() -> list[BenchRecord]:
     """``road_standoff_traffic`` as shipped (24 kinematic traffic cars; 60 s) alternating with the same world without
     its traffic (the same UAVs, sensors and multi-target tracker), 3 runs each, so both see the same load of a shared

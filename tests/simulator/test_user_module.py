@@ -19,6 +19,28 @@ def test_user_estimator_passed_in_code(tmp_path):
     assert np.median(err) < 15.0
     # metrics.json's figure is the same error, computed live against the exact truth of each agent step
     assert result.metrics["targets"]["car1"]["uav1"]["position_error_mean_m"] == pytest.approx(err.mean(), abs=1.0)
+    # demo has traffic: the single-target estimator was wrapped, fed the target track's detections by the built-in
+    # multi-target tracker, whose tracks are recorded
+    tracks = result.stream("tracks", uav=0)
+    assert tracks["track"].size and tracks["is_target"].astype(bool).any()
+
+
+def test_user_multi_target_tracker_is_used_as_it_is(tmp_path):
+    from tests.simulator.user_modules.fix_tracks import FixTracks
+
+    made = []
+
+    def factory(i, uav):
+        made.append(FixTracks())
+        return made[-1]
+
+    result = run("demo", duration=6.0, seed=2, out_dir=tmp_path, estimator=factory)
+    assert result.status == "completed"
+    assert all(m.cued == 1 for m in made)  # the hand-off reached it
+    tracks = result.stream("tracks", uav=0)
+    assert tracks["track"].size and tracks["track"].min() >= 1000  # its own tracks, not the built-in tracker's
+    assert "mot" in result.metrics["uavs"]["uav1"]
+    assert result.metrics["targets"]["car1"]["uav1"]["identity_fraction"] is not None
 
 
 def test_user_modules_named_in_the_world_file(tmp_path):

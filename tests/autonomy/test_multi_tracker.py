@@ -86,13 +86,14 @@ def _nearest_ids(tr, a, b):
     return out
 
 
-def test_target_is_found_among_traffic_by_colour_and_held():
+@pytest.mark.parametrize("associator", ["gnn", "jpda"])
+def test_target_is_found_among_traffic_by_colour_and_held(associator):
     """Five cars in a row 60 m apart, one of the target's colour; no cue. The colour readings make its track the
     target's within a few scans, and it stays so. Without a cue, "the target is a car not yet tracked" keeps the
     weight of a track without readings, so the red track's probability tends to (1/π(red)) / (1/π(red) + 1) = 10/11
     (the four others' readings rule them out)."""
     rng = np.random.default_rng(3)
-    tr = _tracker()
+    tr = _tracker(associator=associator)
     cars = np.array([[60.0 * k, 0.0] for k in range(5)])
     colours = [0, 0, 1, 0, 0]
     on_target = []

@@ -1,0 +1,63 @@
+"""When a UAV tracks many cars, what its tracker is told about the target, and what is refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autonomy.estimation.tracking.gated import TargetGatedEstimator
+from autonomy.estimation.tracking.multi import MultiTargetTracker
+from simulator.builders.multi_target import TRACK_BAND_M, identity_config, multi_target, tracking_mode
+from simulator.registry import build_estimator
+from worlds.build import build_geometry
+from worlds.catalog import CAR_COLOURS, CAR_TYPES
+from worlds.errors import WorldError
+from worlds.loader import load_world
+
+
+def test_auto_mode_tracks_many_cars_only_where_there_are_several():
+    demo = load_world("demo").world
+    assert tracking_mode(demo, demo.uavs[0]) == "multi"
+    one = load_world("road_standoff").world
+    assert tracking_mode(one, one.uavs[0]) == "single"
+    forced = load_world("road_standoff", ["uavs[0].autonomy.estimator.tracking.mode=multi"]).world
+    assert tracking_mode(forced, forced.uavs[0]) == "multi"
+    search = load_world("search_decoys").world  # set-membership holds every target as sets
+    assert tracking_mode(search, search.uavs[0]) == "single"
+
+
+def test_the_tracker_is_told_the_targets_classes_and_the_traffics():
+    loaded = load_world("demo")
+    world = loaded.world
+    network = build_geometry(world, loaded.path, np.random.default_rng(1)).network
+    cfg = identity_config(world, world.uavs[0], network)
+    assert cfg.target_classes == {"colour": CAR_COLOURS.index("red"), "body": CAR_TYPES.index("sedan"),
+                                  "length": 0}
+    # three traffic cars (white van, blue and black sedans), one pseudo-count per class
+    np.testing.assert_allclose(cfg.background["body"], np.array([1 + 2, 1 + 1]) / 5)
+    assert cfg.background["colour"][CAR_COLOURS.index("red")] == pytest.approx(1 / 10)
+    assert cfg.background_density == pytest.approx(3 / (network.street_length() * TRACK_BAND_M))
+
+
+def test_built_in_trackers_become_multi_target_and_plugins_are_wrapped():
+    loaded = load_world("demo", ["uavs[0].autonomy.estimator.type=ecukf"])
+    world = loaded.world
+    network = build_geometry(world, loaded.path, np.random.default_rng(1)).network
+    est = multi_target(build_estimator(world.uavs[0], 0, network), world, world.uavs[0], network)
+    assert isinstance(est, MultiTargetTracker)
+
+    class Mine:
+        def step(self, t, detections):
+            return None
+
+    wrapped = multi_target(Mine(), world, world.uavs[0], network)
+    assert isinstance(wrapped, TargetGatedEstimator) and isinstance(wrapped.inner, Mine)
+
+
+def test_consensus_fusion_among_traffic_is_refused_with_the_key_path(tmp_path):
+    from simulator.api import run
+
+    sets = [f"uavs[{i}].autonomy.estimator.type=scif" for i in (0, 1)]
+    sets += [f"uavs[{i}].autonomy.fusion={{method: hcmci}}" for i in (0, 1)]
+    with pytest.raises(WorldError, match=r"uavs\[0\]\.autonomy\.estimator\.tracking\.mode.*single"):
+        run("demo", duration=1.0, out_dir=tmp_path, overrides=sets)

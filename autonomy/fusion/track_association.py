@@ -32,10 +32,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.special import gammaincinv
 
-from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-from .track_fusion import predict_estimate
+from .track_fusion import fuse_estimates, predict_estimate
 
 __all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks"]
 
@@ -155,24 +154,7 @@ class TeamTrackFusion:
             if track_id != own_target:
                 self.disagreements += 1
             parts = [own_est[best_own], *fused_parts[best_own]]
-            return TeamTarget(estimate=self._fuse(t, parts), probability=p_own, own_track_id=track_id,
+            return TeamTarget(estimate=fuse_estimates(self.method, t, parts), probability=p_own, own_track_id=track_id,
                               fused_with=len(parts) - 1)
         self.disagreements += 1
         return TeamTarget(estimate=loose[best_loose][1], probability=p_loose, own_track_id=None, fused_with=0)
-
-    def _fuse(self, t: float, parts: list[TargetEstimate]) -> TargetEstimate:
-        if len(parts) == 1:
-            return parts[0]
-        xs = [np.concatenate([e.p_W, e.v_W]) for e in parts]
-        Ps = [np.asarray(e.P) for e in parts]
-        if self.method == "convex":
-            x, P = xs[0], Ps[0]
-            for xb, Pb in zip(xs[1:], Ps[1:], strict=True):
-                f = state_vector_fusion(x, P, xb, Pb)
-                x, P = f.x, f.P
-        else:
-            f = covariance_intersection(xs, Ps)
-            x, P = f.x, f.P
-        n = parts[0].p_W.size
-        return TargetEstimate(t=t, p_W=x[:n], v_W=x[n:], P=P)
-

@@ -18,7 +18,7 @@ import numpy as np
 from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-__all__ = ["TrackFusionConfig", "TrackFusion", "predict_estimate"]
+__all__ = ["TrackFusionConfig", "TrackFusion", "fuse_estimates", "predict_estimate"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,6 +67,25 @@ def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
     return TargetEstimate(t=t, p_W=est.p_W + dt * est.v_W, v_W=est.v_W, P=P)
 
 
+def fuse_estimates(method: str, t: float, parts: Sequence[TargetEstimate]) -> TargetEstimate:
+    """Estimates of one target at ``t`` (s), each with a covariance, fused: sequential convex (state-vector) fusion
+    ignoring cross-covariance (paper 002), or covariance intersection."""
+    if len(parts) == 1:
+        return parts[0]
+    xs = [np.concatenate([e.p_W, e.v_W]) for e in parts]
+    Ps = [np.asarray(e.P) for e in parts]
+    if method == "convex":
+        x, P = xs[0], Ps[0]
+        for xb, Pb in zip(xs[1:], Ps[1:], strict=True):
+            f = state_vector_fusion(x, P, xb, Pb)
+            x, P = f.x, f.P
+    else:
+        f = covariance_intersection(xs, Ps)
+        x, P = f.x, f.P
+    n = parts[0].p_W.size
+    return TargetEstimate(t=t, p_W=x[:n], v_W=x[n:], P=P)
+
+
 class TrackFusion:
     """Fuses the own estimate with teammates' shared estimates at a given time; among traffic, the teammates' tracks
     with one's own after associating them (:meth:`fuse_tracks`)."""
@@ -98,16 +117,5 @@ class TrackFusion:
             return own
         if len(parts) == 1:
             return parts[0]
-        xs = [np.concatenate([e.p_W, e.v_W]) for e in parts]
-        Ps = [e.P for e in parts]
-        if cfg.method == "convex":
-            x, P = xs[0], Ps[0]
-            for xb, Pb in zip(xs[1:], Ps[1:], strict=False):
-                f = state_vector_fusion(x, P, xb, Pb)
-                x, P = f.x, f.P
-        else:
-            f = covariance_intersection(xs, Ps)
-            x, P = f.x, f.P
         self.fusions += 1
-        n = parts[0].p_W.size
-        return TargetEstimate(t=t, p_W=x[:n], v_W=x[n:], P=P)
+        return fuse_estimates(cfg.method, t, parts)

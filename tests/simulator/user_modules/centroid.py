@@ -13,6 +13,14 @@ from interfaces.setpoints import VelocitySetpoint
 from interfaces.state import TargetEstimate
 
 
+def radar_fix(d, target_height: float) -> np.ndarray:
+    """The ground position (x, y) of a radar detection's range and azimuth on the plane ``z = target_height``."""
+    rng, az = d.z[0], d.z[1]
+    dz = target_height - d.p_sensor_W[2]
+    rho = np.sqrt(max(rng ** 2 - dz ** 2, 0.0))
+    return d.p_sensor_W[:2] + rho * np.array([np.cos(az), np.sin(az)])
+
+
 class CentroidEstimator:
     def __init__(self, window_s: float = 2.0, target_height: float = 0.0) -> None:
         self.window_s = window_s
@@ -23,12 +31,8 @@ class CentroidEstimator:
     def step(self, t, detections):
         self.calls += 1
         for d in detections:
-            if d.kind != "radar":
-                continue
-            rng, az = d.z[0], d.z[1]
-            dz = self.target_height - d.p_sensor_W[2]
-            rho = np.sqrt(max(rng ** 2 - dz ** 2, 0.0))
-            self.fixes.append((d.t_meas, d.p_sensor_W[:2] + rho * np.array([np.cos(az), np.sin(az)])))
+            if d.kind == "radar":
+                self.fixes.append((d.t_meas, radar_fix(d, self.target_height)))
         self.fixes = [(tm, p) for tm, p in self.fixes if t - tm <= self.window_s]
         if not self.fixes:
             return None

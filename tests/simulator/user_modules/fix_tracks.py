@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from interfaces.state import TargetEstimate, TrackReport
+from tests.simulator.user_modules.centroid import radar_fix
 
 
 class FixTracks:
@@ -23,14 +24,7 @@ class FixTracks:
         self.last = np.asarray(p_W, dtype=float)[:2]
 
     def step(self, t, detections):
-        fixes = []
-        for d in detections:
-            if d.kind != "radar":
-                continue
-            rng, az = d.z[0], d.z[1]
-            dz = self.target_height - d.p_sensor_W[2]
-            rho = np.sqrt(max(rng ** 2 - dz ** 2, 0.0))
-            fixes.append(d.p_sensor_W[:2] + rho * np.array([np.cos(az), np.sin(az)]))
+        fixes = [radar_fix(d, self.target_height) for d in detections if d.kind == "radar"]
         if not fixes:
             return None if self.last is None else TargetEstimate(t=t, p_W=self.last, v_W=np.zeros(2))
         ref = self.last if self.last is not None else fixes[0]

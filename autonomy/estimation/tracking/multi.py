@@ -21,9 +21,9 @@ there; None without either.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -34,10 +34,15 @@ from autonomy.estimation.models import MotionModel
 from interfaces.state import TargetEstimate, TrackReport
 
 from .batch_update import update_pairs
+from .fixes import PositionFixer
+from .gate import ChiSquareGate, PredictedNis
 from .identity import IdentityConfig, TargetIdentity, track_evidence
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
 from .track import Track
+
+if TYPE_CHECKING:
+    from autonomy.estimation.tracker import TrackerConfig
 
 __all__ = ["MultiTargetTracker", "MultiTrackerConfig"]
 
@@ -110,13 +115,10 @@ class MultiTargetTracker:
         The filter gated against, given a track's filter (default: that filter).
     """
 
-    def __init__(self, config, multi: MultiTrackerConfig, identity: IdentityConfig, *,
+    def __init__(self, config: TrackerConfig, multi: MultiTrackerConfig, identity: IdentityConfig, *,
                  model: MotionModel | None = None, filters: FilterFactory | None = None,
-                 gating_filter=None) -> None:
-        from autonomy.estimation.tracker import ConfiguredFilters, make_motion_model
-
-        from .fixes import PositionFixer
-        from .gate import ChiSquareGate
+                 gating_filter: Callable[[Filter], Filter] | None = None) -> None:
+        from autonomy.estimation.tracker import ConfiguredFilters, make_motion_model  # it imports this package
 
         self.config = config
         self.multi = multi
@@ -354,10 +356,10 @@ class MultiTargetTracker:
         return TargetEstimate(t=track.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=P[np.ix_(idx, idx)])
 
 
-def _associator(multi: MultiTrackerConfig, gate, model: MotionModel, target_height: float, gating_filter):
+def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionModel, target_height: float,
+                gating_filter: Callable[[Filter], Filter] | None) -> object:
     """The configured associator of a scan's detections to many tracks."""
     from .assignment import GlobalNearestNeighbourAssociator
-    from .gate import PredictedNis
     from .jpda import JointProbabilisticAssociator
 
     distance = PredictedNis(model, target_height, gating_filter)

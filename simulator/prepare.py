@@ -152,11 +152,14 @@ def team_comms(teams: list[TeamProtocol], agents: list[AgentSlot], **parts: Any)
 def _check_information_tracker(loaded: LoadedWorld, i: int, estimator: TargetEstimator, method: str) -> None:
     """HCMCI and base-station fusion need the built-in tracker with the information filter (also when an estimator was
     passed in code)."""
+    if method == "hcmci" and isinstance(estimator, MultiTargetTracker) and estimator.config.filter == "scif":
+        return  # HCMCI on each node's target track, between nodes whose target tracks are one car
     if isinstance(estimator, MultiTargetTracker | TargetGatedEstimator):
         raise WorldError(str(loaded.path), [WorldIssue(
             f"uavs[{i}].autonomy.estimator.tracking.mode", "multi",
-            f"single: fusion method {method} fuses one track's information (a consensus over many tracks is not "
-            f"built); a world with traffic tracks every car by default")])
+            f"single: fusion method {method} fuses one track's information"
+            + (" (the built-in tracker with the scif filter runs HCMCI among traffic)" if method == "hcmci" else "")
+            + "; a world with traffic tracks every car by default")])
     if not is_information_tracker(estimator):
         raise WorldError(str(loaded.path), [WorldIssue(
             f"uavs[{i}].autonomy.estimator", type(estimator).__name__,

@@ -7,7 +7,9 @@ gain ``b``), and each of them takes its consensus posterior. Nodes without a tra
 average, and a trackless node in the graph would only dilute its neighbours' information.
 
 The links come from the caller (the radio's state at this step); this module only restricts them to the nodes that
-take part.
+take part, and, when the nodes track many cars (each node's track is the one it takes for the target), to the pairs of
+nodes whose priors are one car: ``dᵀ (P_i + P_j)⁻¹ d`` of the difference of their prior means under the χ² quantile
+``association_gate`` (:func:`associated_links`), so the team never averages two different cars.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import gammaincinv
 
 from autonomy.estimation.base import TIME_TOLERANCE
 from autonomy.estimation.scif import SqrtInformation
@@ -23,7 +26,12 @@ from autonomy.estimation.tracker import SingleTargetTracker, TrackInformation
 from autonomy.fusion.consensus import hcmci
 from interfaces.state import TargetEstimate
 
-__all__ = ["HcmciConfig", "HcmciTeam", "TeamStep", "consensus_adjacency", "fuse_team", "pair_adjacency"]
+__all__ = ["HcmciConfig", "HcmciTeam", "TeamStep", "associated_links", "consensus_adjacency", "fuse_team",
+           "pair_adjacency"]
+
+
+ASSOCIATION_PROBABILITY = 0.999
+"""Probability of the χ² gate under which two nodes' target tracks are taken for one car (nodes tracking many cars)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -97,11 +105,33 @@ def consensus_adjacency(links_up: np.ndarray, takes_part: Sequence[bool]) -> np.
     return out
 
 
-def fuse_team(infos: Sequence[TrackInformation | None], links_up: np.ndarray, config: HcmciConfig) -> TeamStep:
-    """HCMCI over the nodes with a track (``infos[j]`` not None) on the links of ``links_up`` among them.
+def associated_links(infos: Sequence[TrackInformation | None], links_up: np.ndarray, gate: float) -> np.ndarray:
+    """``links_up`` less the links between nodes whose priors are not one car: the Mahalanobis distance of their
+    prior means, ``dᵀ (P_i + P_j)⁻¹ d`` (cross-covariance ignored), above ``gate`` (a χ² quantile for the state
+    size); nodes without a track keep their links (:func:`consensus_adjacency` drops them)."""
+    A = np.array(links_up, dtype=bool)
+    stats = {}
+    for j, info in enumerate(infos):
+        if info is not None:
+            Y = info.prior.S @ info.prior.S.T
+            stats[j] = (np.linalg.solve(Y, info.prior.h), np.linalg.inv(Y))
+    for i, j in zip(*np.nonzero(np.triu(A, 1)), strict=True):
+        if i in stats and j in stats:
+            d = stats[i][0] - stats[j][0]
+            if float(d @ np.linalg.solve(stats[i][1] + stats[j][1], d)) > gate:
+                A[i, j] = A[j, i] = False
+    return A
+
+
+def fuse_team(infos: Sequence[TrackInformation | None], links_up: np.ndarray, config: HcmciConfig,
+              association_gate: float | None = None) -> TeamStep:
+    """HCMCI over the nodes with a track (``infos[j]`` not None) on the links of ``links_up`` among them (and, with
+    ``association_gate``, only between nodes whose priors are one car: :func:`associated_links`).
 
     Raises ValueError unless those nodes' priors hold at one time and have one state size (one motion model).
     """
+    if association_gate is not None:
+        links_up = associated_links(infos, links_up, association_gate)
     A = consensus_adjacency(links_up, [x is not None for x in infos])
     nodes = [j for j, x in enumerate(infos) if x is not None]
     posteriors: list[SqrtInformation | None] = [None] * len(infos)
@@ -137,10 +167,35 @@ class HcmciTeam:
         if not (len(trackers) == len(detections) == np.shape(links_up)[0]):
             raise ValueError(f"trackers ({len(trackers)}), detections ({len(detections)}) and links_up "
                              f"({np.shape(links_up)}) must have one entry per node")
+        many = any(hasattr(trk, "track_reports") for trk in trackers)  # each node's track: its choice of target
+        if many:
+            _pool_targets(t, trackers, np.asarray(links_up, dtype=bool))
         infos = [trk.step_information(t, dets) for trk, dets in zip(trackers, detections, strict=True)]
-        result = fuse_team(infos, links_up, self.config)
+        size = next((x.prior.h.size for x in infos if x is not None), 1)
+        gate = float(2.0 * gammaincinv(size / 2.0, ASSOCIATION_PROBABILITY)) if many else None
+        result = fuse_team(infos, links_up, self.config, association_gate=gate)
         for trk, post in zip(trackers, result.posteriors, strict=True):
             if post is not None:
                 trk.set_information(post)
         self.steps += 1
         return [trk.current_estimate() for trk in trackers], result
+
+
+def _pool_targets(t: float, trackers: Sequence[object], links_up: np.ndarray) -> None:
+    """Before a step of trackers that hold many cars: each node takes for the target the track the linear pool of
+    its own and its linked neighbours' beliefs picks (their confirmed tracks of the last step, associated with its
+    own; :class:`~autonomy.fusion.track_association.TeamTrackFusion`), so a node that has not yet told the target
+    from a look-alike follows one that has, and their target tracks meet in the consensus."""
+    from autonomy.fusion.track_association import TeamTrackFusion
+    from interfaces.state import TrackPicture
+
+    pictures = []
+    for trk in trackers:
+        reports = tuple(r for r in trk.track_reports() if r.confirmed) if hasattr(trk, "track_reports") else ()
+        pictures.append(TrackPicture(t=max([r.estimate.t for r in reports], default=t), tracks=reports,
+                                     target_track_id=getattr(trk, "target_track_id", None)))
+    pool = TeamTrackFusion("covariance_intersection", max_age_s=np.inf, q=1.0)
+    for j, trk in enumerate(trackers):
+        mates = [pictures[k] for k in range(len(trackers)) if k != j and links_up[j, k] and pictures[k].tracks]
+        if mates and hasattr(trk, "team_target"):
+            trk.team_target = pool.fuse(t, None, pictures[j].tracks, pictures[j].target_track_id, mates).own_track_id

@@ -222,3 +222,25 @@ def test_information_step_sums_the_contributions_of_every_scan_taken_at_the_step
 def test_information_step_needs_the_information_filter():
     with pytest.raises(TypeError, match="scif"):
         SingleTargetTracker(TrackerConfig(filter="ekf")).step_information(0.0, [])
+
+
+def test_associated_links_drop_pairs_whose_priors_are_two_cars():
+    """Nodes tracking many cars fuse only with nodes whose target track is the same car: the link between priors
+    d apart with covariances P_i = P_j = σ² I stays iff |d|² / (2σ²) <= gate."""
+    from autonomy.estimation.scif import SqrtInformation
+    from autonomy.estimation.tracking.information import TrackInformation
+    from autonomy.fusion.hcmci_team import associated_links
+
+    def info(x, var):
+        Y = np.eye(4) / var
+        return TrackInformation(t=1.0, prior=SqrtInformation(np.linalg.cholesky(Y), Y @ np.asarray(x, float)),
+                                contribution=None)
+
+    gate = 18.47  # χ²_4 at 0.999
+    near, far = np.sqrt(gate * 2 * 25.0) * 0.99, np.sqrt(gate * 2 * 25.0) * 1.01
+    infos = [info([0, 0, 0, 0], 25.0), info([near, 0, 0, 0], 25.0), info([far, 0, 0, 0], 25.0), None]
+    links = np.ones((4, 4), bool)
+    np.fill_diagonal(links, False)
+    A = associated_links(infos, links, gate)
+    assert A[0, 1] and A[1, 0] and not A[0, 2] and not A[2, 0] and A[1, 2]  # 1–2 are 0.02·… apart: one car
+    assert A[0, 3] and A[3, 2]  # a node without a track keeps its links (the consensus drops it anyway)

@@ -28,15 +28,17 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from scipy.spatial import cKDTree
 
-from autonomy.estimation.base import Filter
+from autonomy.estimation.base import TIME_TOLERANCE, Filter
 from autonomy.estimation.measurements import MeasurementLike
 from autonomy.estimation.models import MotionModel
+from autonomy.estimation.scif import SqrtInformation, add_information
 from interfaces.state import TargetEstimate, TrackReport
 
 from .batch_update import update_pairs
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
 from .identity import IdentityConfig, TargetIdentity, track_evidence
+from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
 from .track import Track
@@ -149,6 +151,10 @@ class MultiTargetTracker:
         self.starts_refused = 0
         self.used_by_sensor: dict[str, int] = {}
         self._step_detections: dict[int, list] = {}
+        self._last_t = 0.0
+        self.team_target: int | None = None  # set by a consensus team before a step: the track it takes for the target
+        self._defer: tuple[int, float] | None = None  # (target track id, step time) of a consensus step
+        self._deferred: list[MeasurementLike] = []
 
     # -- the estimator interface ---------------------------------------------------------------------------------
     def cue(self, t: float, p_W: np.ndarray, sigma_m: float) -> None:
@@ -164,11 +170,20 @@ class MultiTargetTracker:
             self._process_scan(t_meas, scan)
         self._drop_lost(t)
         self._target = self.identity.target()
+        if self.team_target is not None and self._track(self.team_target) is not None:
+            self._target = self.team_target  # the team's choice (a consensus team pools its members' beliefs)
+        self.team_target = None
+        self._last_t = float(t)
         track = self._track(self._target)
         if track is not None:
             if t > track.filter.t:
                 track.filter.predict(t)
             return self._estimate(track)
+        return self._search_estimate(t)
+
+    def _search_estimate(self, t: float) -> TargetEstimate | None:
+        """Where the target is believed to be at ``t`` (s) while no track is it (the cue or the lost track's last
+        estimate, grown with time), as an estimate guidance can fly to; None without either."""
         search = self.identity.search_estimate(t)
         if search is None:
             return None
@@ -177,6 +192,50 @@ class MultiTargetTracker:
         P[:2, :2] = S
         P[2:, 2:] = np.eye(2) * self.identity.config.search_speed ** 2
         return TargetEstimate(t=float(t), p_W=mean, v_W=np.zeros(2), P=P)
+
+    def step_information(self, t: float, detections: Sequence[MeasurementLike]) -> TrackInformation | None:
+        """:meth:`step` for a consensus team (HCMCI): every track is updated as usual except the target's, whose
+        detections taken at ``t`` (s) are not applied; their information contribution is returned beside the
+        target track's prior at ``t`` (:mod:`.information`). If the belief moves to another track during the step,
+        the deferred detections update the track they were taken for, and the new target track's information has no
+        contribution. Needs information filters (``scif``). None while no track is the target."""
+        if self.config.filter != "scif":
+            raise TypeError(f"step_information needs the information filter (scif), not {self.config.filter!r}")
+        self._defer, self._deferred = (self._target, float(t)) if self._target is not None else None, []
+        try:
+            self.step(t, detections)
+        finally:
+            deferred_for = self._defer[0] if self._defer is not None else None
+            self._defer = None
+        track = self._track(self._target)
+        old = self._track(deferred_for)
+        if self._deferred and (track is None or track is not old):
+            for det in self._deferred:  # the belief moved: the detections update the track they were taken for
+                if old is not None:
+                    old.filter.update(det)
+            self._deferred = []
+        if track is None:
+            return None
+        parts = [track.filter.information(d)[0] for d in self._deferred]
+        self._deferred = []
+        if t > track.filter.t:
+            track.filter.predict(t)
+        total = None if not parts else parts[0] if len(parts) == 1 else add_information(*parts)
+        return TrackInformation(t=float(t), prior=track.filter.information_state, contribution=total)
+
+    def set_information(self, info: SqrtInformation) -> None:
+        """Replace the target track's estimate by ``info`` (the consensus posterior of the last
+        :meth:`step_information`)."""
+        track = self._track(self._target)
+        if track is None:
+            raise ValueError("set_information needs a target track")
+        track.filter.set_information(info)
+
+    def current_estimate(self) -> TargetEstimate | None:
+        """The target track's estimate at its filter's time (after :meth:`set_information`), or, without a target
+        track, the search centre's at the last step's time (None without either)."""
+        track = self._track(self._target)
+        return self._estimate(track) if track is not None else self._search_estimate(self._last_t)
 
     @property
     def target_track_id(self) -> int | None:
@@ -215,7 +274,11 @@ class MultiTargetTracker:
         hit: set[int] = set()
         if result.weights is None:
             pairs = [(live[i], result.detections[j]) for i, j in result.pairs]
-            update_pairs([(tr.filter, det) for tr, det in pairs], self.layout, self.config.target_height)
+            applied = pairs
+            if self._defer is not None and abs(t_meas - self._defer[1]) <= TIME_TOLERANCE:
+                self._deferred.extend(d for tr, d in pairs if tr.track_id == self._defer[0])
+                applied = [(tr, d) for tr, d in pairs if tr.track_id != self._defer[0]]
+            update_pairs([(tr.filter, det) for tr, det in applied], self.layout, self.config.target_height)
             for track, det in pairs:
                 if getattr(det, "classes", ()):
                     self._read_classes(track, [(1.0, det)])

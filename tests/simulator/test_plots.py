@@ -10,7 +10,8 @@ def test_standoff_and_link_plots_appear_with_standoff_guidance_and_a_lossy_radio
     out = tmp_path / "run"
     run("demo", duration=3.0, seed=2, out_dir=out, overrides=["comms.model=rayleigh", "comms.block_by_buildings=true"])
     names = {p.name for p in write_plots(out)}
-    assert names == {"trajectories.png", "errors.png", "altitude.png", "standoff.png", "links.png"}
+    # demo has traffic: its multi-target tracks are drawn too
+    assert names == {"trajectories.png", "errors.png", "altitude.png", "standoff.png", "links.png", "tracks.png"}
     for name in names:
         img = cv2.imread(str(out / "plots" / name))
         assert img is not None and img.shape[0] > 200 and img.std() > 5.0  # a drawn figure, not a blank canvas

@@ -160,9 +160,10 @@ def test_radio_channel_carries_team_state_and_outages(tmp_path):
     cut = run("demo", duration=4.0, out_dir=tmp_path / "cut", overrides=[
         "comms.model=rayleigh", "comms.outages=[{link: [uav1, uav2], start_s: 0, end_s: 100}]"])
     c = cut.metrics["comms"]
-    assert c["sent"] == 2 * 40 and c["delivered"] == 0 and c["lost"] == c["sent"]
+    # two UAVs, 40 agent steps each, each step a state and a track picture (demo's UAVs fuse their tracks)
+    assert c["sent"] == 2 * 40 * 2 and c["delivered"] == 0 and c["lost"] == c["sent"]
     assert [e["type"] for e in cut.record.events].count("link_outage_start") == 1
-    # UAVs ~590 m apart: Pr = exp(-(d/1000)^3) ≈ 0.81; delivery ratio over 80 packets within a binomial band
+    # UAVs ~590 m apart: Pr = exp(-(d/1000)^3) ≈ 0.81; delivery ratio over 160 packets within a binomial band
     ok = run("demo", duration=4.0, out_dir=tmp_path / "ok", overrides=["comms.model=rayleigh",
                                                                       "comms.block_by_buildings=false"])
     ratio = ok.metrics["comms"]["delivered"] / ok.metrics["comms"]["sent"]

@@ -16,7 +16,7 @@ RADAR = "uavs[0].sensors[0]"
 
 
 def test_colour_defaults_to_white_and_reaches_the_truth_attributes():
-    world = load_world("demo").world
+    world = load_world("road_standoff").world  # its car names no colour
     assert world.ground_vehicles[0].colour == "white"
     world = load_world("demo", ["ground_vehicles[0].colour=green", "ground_vehicles[0].type=van"]).world
     g = world.ground_vehicles[0]
@@ -32,7 +32,7 @@ def test_every_catalogue_colour_loads():
 
 
 def test_sensor_entries_without_classify_build_sensors_that_classify_nothing():
-    world = load_world("demo").world
+    world = load_world("road_standoff").world  # its radars name no classify block
     assert build_sensor(world.uavs[0].sensors[0], "r").config.classify == ()
 
 

@@ -12,8 +12,10 @@ from worlds.loader import load_world, shipped_worlds
 
 DEMO = shipped_worlds()["demo"]
 
-PHYSICS_100 = ("sim.physics_hz=100", "uavs[0].outer_loop_hz=50", "uavs[1].outer_loop_hz=50")
-"""Every visible rate of demo divides 100 Hz after these; only the car driver's own 40 Hz does not."""
+PHYSICS_100 = ("sim.physics_hz=100", "uavs[0].outer_loop_hz=50", "uavs[1].outer_loop_hz=50",
+               *(f"ground_vehicles[{k}].driver.rate_hz=20" for k in (1, 2, 3)))
+"""Every visible rate of demo divides 100 Hz after these (the traffic cars' drivers at 20 Hz); only the target car's
+driver's own 40 Hz does not."""
 
 MISTAKES = [
     pytest.param(("ground_vehicles[0].type=truck",), "ground_vehicles[0].type", "truck",

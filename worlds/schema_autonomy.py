@@ -106,8 +106,9 @@ class TrackingSpec(Strict):
     merge_speed_mps: float = Field(2.0, gt=0, le=50, description="velocity difference under which close tracks "
                                                                  "merge, m/s")
     max_tracks: int = Field(500, ge=1, le=100000, description="most live tracks")
-    min_target_probability: float = Field(0.5, gt=0, le=1, description="the most probable track is taken for the "
-                                                                       "target when its probability reaches this")
+    min_target_probability: float = Field(0.2, gt=0, le=1, description="the most probable track is taken for the "
+                                          "target when its probability reaches this (following the best candidate "
+                                          "lets a pointed camera confirm or reject it)")
     search_speed: float = Field(8.0, gt=0, le=100, description="growth of the region a lost (or cued) target is "
                                                                "searched in, m/s per axis")
 

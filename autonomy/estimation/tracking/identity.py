@@ -25,8 +25,10 @@ Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` 
   becomes where the target is believed to be (so a lost target is re-acquired from the tracks born near where it was
   last seen, with the search region growing with time).
 
-The target track is the most probable one if its probability reaches ``min_probability``; otherwise there is none
-and the target is believed to be near ``μ`` (the search centre).
+The target track is the most probable track if its probability reaches ``min_probability`` (even while "the target
+is in no track" is as likely: following the best candidate is what lets the UAV resolve the doubt, as its camera,
+pointed at that track, reads its colour and type, which confirm it or move the belief to another track); otherwise
+there is none and the target is believed to be near ``μ`` (the search centre).
 """
 
 from __future__ import annotations
@@ -65,7 +67,7 @@ class IdentityConfig:
     background: Mapping[str, np.ndarray]
     background_density: float = 1e-4
     search_speed: float = 8.0
-    min_probability: float = 0.5
+    min_probability: float = 0.2
 
     def __post_init__(self) -> None:
         if not self.background_density > 0:

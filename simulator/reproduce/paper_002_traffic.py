@@ -21,6 +21,7 @@ of its own (unfused) one too.
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -233,7 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     a.out.mkdir(parents=True, exist_ok=True)
     ctx = ReproContext(out_dir=a.out, runs=a.runs, workers=a.workers, seed=a.seed, quick=a.quick)
     rep = reproduce_traffic(ctx)
-    write_paper_report(rep, a.out, "python -m simulator.reproduce.paper_002_traffic " + " ".join(argv or []))
+    args = sys.argv[1:] if argv is None else argv
+    write_paper_report(rep, a.out, "python -m simulator.reproduce.paper_002_traffic " + " ".join(args))
     return 0
 
 

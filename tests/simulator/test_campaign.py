@@ -96,7 +96,8 @@ def test_crashing_runs_are_recorded_and_the_campaign_goes_on(tmp_path, monkeypat
     monkeypatch.syspath_prepend(str(ROOT))
     plugin = "tests.simulator.user_modules.raising:FailingEstimator"
     code = main(["campaign", "demo", "--runs", "2", "--duration", "2", "--workers", "1", "--quiet",
-                 "--out", str(tmp_path), "--set", f"uavs[0].autonomy.estimator={{type: plugin, plugin: '{plugin}', tracking: {{mode: single}}}}"])
+                 "--out", str(tmp_path), "--set", f"uavs[0].autonomy.estimator={{type: plugin, plugin: '{plugin}', "
+                 "tracking: {mode: single}}"])
     assert code == 1  # every run failed (the plugin sees every detection: not wrapped, as it would be among traffic)
     lines = _journal(tmp_path)
     assert sorted(r["index"] for r in lines) == [0, 1]

@@ -22,8 +22,8 @@ from typing import Protocol
 import numpy as np
 
 from interfaces.setpoints import Setpoint
-from autonomy.diagnostics import HoldsTracks
-from interfaces.state import OwnState, TargetEstimate, TrackPicture
+from autonomy.fusion.track_association import track_picture
+from interfaces.state import OwnState, TargetEstimate
 from autonomy.sensing.camera import Camera
 from autonomy.sensing.channel import Channel
 from autonomy.sensing.measurement import SensorOutput
@@ -44,15 +44,6 @@ __all__ = ["Assembly", "Physics", "TickContext", "WALL_PHASES"]
 # of all vehicles, the PyBullet step, sensors (with their raycasts), the agents (estimation, fusion, guidance and the
 # messages between them), recording (events, truth, collision checks)
 WALL_PHASES = ("vehicles", "physics", "sensors", "autonomy", "record")
-
-
-def track_picture(estimator: object, t: float) -> TrackPicture | None:
-    """What a UAV with many tracks shares at ``t`` (s): its confirmed tracks and its target track; None for a
-    single-target estimator."""
-    if not isinstance(estimator, HoldsTracks):
-        return None
-    return TrackPicture(t=t, tracks=tuple(r for r in estimator.track_reports() if r.confirmed),
-                        target_track_id=estimator.target_track_id)
 
 
 class Physics(Protocol):

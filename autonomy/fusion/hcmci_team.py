@@ -186,16 +186,12 @@ def _pool_targets(t: float, trackers: Sequence[object], links_up: np.ndarray) ->
     its own and its linked neighbours' beliefs picks (their confirmed tracks of the last step, associated with its
     own; :class:`~autonomy.fusion.track_association.TeamTrackFusion`), so a node that has not yet told the target
     from a look-alike follows one that has, and their target tracks meet in the consensus."""
-    from autonomy.fusion.track_association import TeamTrackFusion
-    from interfaces.state import TrackPicture
+    from autonomy.fusion.track_association import TeamTrackFusion, track_picture
 
-    pictures = []
-    for trk in trackers:
-        reports = tuple(r for r in trk.track_reports() if r.confirmed) if hasattr(trk, "track_reports") else ()
-        pictures.append(TrackPicture(t=max([r.estimate.t for r in reports], default=t), tracks=reports,
-                                     target_track_id=getattr(trk, "target_track_id", None)))
+    pictures = [track_picture(trk, t) for trk in trackers]
     pool = TeamTrackFusion("covariance_intersection", max_age_s=np.inf, q=1.0)
     for j, trk in enumerate(trackers):
-        mates = [pictures[k] for k in range(len(trackers)) if k != j and links_up[j, k] and pictures[k].tracks]
-        if mates and hasattr(trk, "team_target"):
+        mates = [pictures[k] for k in range(len(trackers))
+                 if k != j and links_up[j, k] and pictures[k] is not None and pictures[k].tracks]
+        if mates and pictures[j] is not None and hasattr(trk, "team_target"):
             trk.team_target = pool.fuse(t, None, pictures[j].tracks, pictures[j].target_track_id, mates).own_track_id

@@ -32,11 +32,12 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.special import gammaincinv
 
+from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
 from .track_fusion import fuse_estimates, predict_estimate
 
-__all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks"]
+__all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks", "track_picture"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,15 @@ class TeamTarget:
     probability: float
     own_track_id: int | None
     fused_with: int
+
+
+def track_picture(estimator: object, t: float) -> TrackPicture | None:
+    """What a UAV with many tracks shares at ``t`` (s): its confirmed tracks and its target track; None for an
+    estimator that does not hold tracks (:class:`~autonomy.diagnostics.HoldsTracks`)."""
+    if not isinstance(estimator, HoldsTracks):
+        return None
+    return TrackPicture(t=t, tracks=tuple(r for r in estimator.track_reports() if r.confirmed),
+                        target_track_id=estimator.target_track_id)
 
 
 def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate],
@@ -120,7 +130,8 @@ class TeamTrackFusion:
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
         own_est = [predict_estimate(r.estimate, t, self.q) for r in mine]
         pooled = np.array([r.target_probability for r in mine], dtype=float)
-        none = max(0.0, 1.0 - float(pooled.sum()))
+        own_none = max(0.0, 1.0 - float(pooled.sum()))
+        none = 0.0  # the members' pooled "in no track", one's own share added after the loop
         fused_parts: list[list[TargetEstimate]] = [[] for _ in mine]
         loose: list[tuple[float, TargetEstimate]] = []
         members = 1
@@ -140,8 +151,7 @@ class TeamTrackFusion:
                 taken.add(j)
             loose.extend((theirs[j].target_probability, their_est[j]) for j in range(len(theirs))
                          if j not in taken and theirs[j].target_probability > 0.0)
-        own_none = max(0.0, 1.0 - sum(r.target_probability for r in mine))
-        none += own_none * max(0.0, 1.0 - sum(p for p, _ in loose)) - own_none  # one's own share of "no track"
+        none += own_none * max(0.0, 1.0 - sum(p for p, _ in loose))  # one's own share of "no track"
         best_own = int(np.argmax(pooled)) if len(pooled) else -1
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
         p_own = float(pooled[best_own]) / members if best_own >= 0 else 0.0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from autonomy.estimation.tracking.identity import (IdentityConfig, TargetIdentity, background_frequencies,
-                                                   class_log_likelihood_ratio, track_evidence)
+                                                   track_evidence)
 from autonomy.sensing.measurement import ClassMeasurement
 
 # three colours; the target is colour 2; the background is 60 % colour 0, 30 % colour 1, 10 % colour 2
@@ -26,9 +26,10 @@ def test_class_reading_ratio_is_target_over_background_likelihood():
     reading = ClassMeasurement(attribute="colour", observed=2, confusion=C)
     l_t = C[2, 2]
     l_b = 0.6 * C[0, 2] + 0.3 * C[1, 2] + 0.1 * C[2, 2]
-    assert class_log_likelihood_ratio("colour", reading.likelihood(), _config()) == pytest.approx(math.log(l_t / l_b))
+    ell = {"colour": np.log(reading.likelihood())}
+    assert track_evidence(ell, _config()) == pytest.approx(math.log(l_t / l_b))
     # an attribute the target has no class for carries no evidence
-    assert class_log_likelihood_ratio("length", np.array([0.9, 0.1]), _config()) == 0.0
+    assert track_evidence({"length": np.log([0.9, 0.1])}, _config()) == 0.0
 
 
 def test_belief_after_readings_matches_bayes_by_hand():

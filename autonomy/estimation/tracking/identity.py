@@ -39,8 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "class_log_likelihood_ratio",
-           "track_evidence"]
+__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "track_evidence"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -109,21 +108,6 @@ class SearchCentre:
         dt = max(0.0, t - self.t)
         mean = self.p + self.v * min(dt, 10.0)
         return mean, self.P + np.eye(2) * (search_speed * dt) ** 2
-
-
-def class_log_likelihood_ratio(attribute: str, likelihood: np.ndarray, config: IdentityConfig) -> float:
-    """``log(L_T / L_B)`` of one class reading whose ``p(observed | true class)`` per class is ``likelihood`` (the
-    module docstring); 0 for an attribute the target has no class for."""
-    if attribute not in config.target_classes:
-        return 0.0
-    lik = np.asarray(likelihood, dtype=float)
-    bg = config.background.get(attribute)
-    freq = np.full(lik.size, 1.0 / lik.size) if bg is None else np.asarray(bg, dtype=float)
-    l_t = float(lik[config.target_classes[attribute]])
-    l_b = float(freq @ lik)
-    if l_t <= 0.0:
-        return -50.0  # the target cannot give this reading (a zero in the confusion matrix): all but impossible
-    return math.log(l_t / max(l_b, 1e-300))
 
 
 def track_evidence(loglik: Mapping[str, np.ndarray], config: IdentityConfig) -> float:

@@ -69,6 +69,7 @@ class TrackerSettings(Settings):
     initial_speed_sigma: Pos | None = 15.0
     target_height: float = Field(0.0, allow_inf_nan=False)
     min_crossing_angle: float = Field(math.radians(10.0), gt=0, le=math.pi / 2)
+    ekf_iterations: int = Field(1, ge=1, le=20)
 
 
 class RoadConstraintSettings(Settings):

@@ -101,6 +101,8 @@ class TrackerConfig:
         Stack the detections of all sensors taken at one time into one update (module docstring).
     min_crossing_angle : float
         Smallest angle between two bearing lines for their intersection to fix a position (rad), in (0, π/2].
+    ekf_iterations : int
+        ``ekf``: linearisations per update, >= 1 (1: the plain EKF; more: the iterated EKF, :class:`~.ekf.EKF`).
     """
 
     filter: str = "ekf"
@@ -122,6 +124,7 @@ class TrackerConfig:
     imm_p_stay: float = 0.95
     stack_scans: bool = False
     min_crossing_angle: float = float(np.deg2rad(10.0))
+    ekf_iterations: int = 1
 
     def __post_init__(self) -> None:
         if self.filter not in ("ekf", "ukf", "ckf", "scif", "imm"):
@@ -146,6 +149,8 @@ class TrackerConfig:
             raise ValueError(f"TrackerConfig.confirm_fixes must be 2 or 3, got {self.confirm_fixes!r}")
         if not self.max_target_accel > 0:
             raise ValueError(f"TrackerConfig.max_target_accel must be > 0 m/s², got {self.max_target_accel!r}")
+        if int(self.ekf_iterations) != self.ekf_iterations or self.ekf_iterations < 1:
+            raise ValueError(f"TrackerConfig.ekf_iterations must be an integer >= 1, got {self.ekf_iterations!r}")
         if int(self.max_missed_scans) != self.max_missed_scans or self.max_missed_scans < 1:
             raise ValueError(f"TrackerConfig.max_missed_scans must be an integer >= 1, got {self.max_missed_scans!r}")
         if self.initial_speed_sigma is not None and not self.initial_speed_sigma > 0:
@@ -175,7 +180,8 @@ class ConfiguredFilters:
         if cfg.filter == "imm":
             return cv_ct_imm(x0, P0, t0, q_cv=cfg.q, q_ct=cfg.imm_q_turn, turn_rate=cfg.imm_turn_rate,
                              p_stay=cfg.imm_p_stay, target_height=cfg.target_height)
-        return make_filter(cfg.filter, self.model, x0, P0, t0, target_height=cfg.target_height)
+        extra = {"iterations": cfg.ekf_iterations} if cfg.filter == "ekf" and cfg.ekf_iterations > 1 else {}
+        return make_filter(cfg.filter, self.model, x0, P0, t0, target_height=cfg.target_height, **extra)
 
 
 class SingleTargetTracker(Tracker):

@@ -1,12 +1,12 @@
 """The EKF updates of one scan's assigned pairs, batched: many car tracks take their detections in one set of array
 operations instead of one small matrix product chain each.
 
-For the pairs whose filter is a plain :class:`~autonomy.estimation.ekf.EKF` and whose detection has the scan's
-measurement size, each filter is predicted to the scan time and linearised at its prediction (``h``, ``H`` and the
-angle-wrapped residual of its own detection model, per pair), then all of them are updated at once with the same
-equations as :meth:`EKF.update_with` (``S = H P Hᵀ + R``, ``K = P Hᵀ S⁻¹``, ``x += K ν``, the Joseph form, symmetrised)
-and written back with ``set_state``. The other pairs (UKF, CKF, SCIF, IMM, road-network filters) take their own
-``update``. The results equal the per-filter updates to round-off (a test holds them to 1e-9).
+For the pairs whose filter is a plain :class:`~autonomy.estimation.ekf.EKF` (one linearisation per update) and whose
+detection has the scan's measurement size, each filter is predicted to the scan time and linearised at its prediction
+(``h``, ``H`` and the angle-wrapped residual of its own detection model, per pair), then all of them are updated at
+once with the same equations as :meth:`EKF.update_with` (``S = H P Hᵀ + R``, ``K = P Hᵀ S⁻¹``, ``x += K ν``, the
+Joseph form, symmetrised) and written back with ``set_state``. The other pairs (UKF, CKF, SCIF, IMM, road-network
+filters) take their own ``update``. The results equal the per-filter updates to round-off (a test holds them to 1e-9).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def update_pairs(pairs: Sequence[tuple[object, MeasurementLike]], layout: tuple[
     """Update each ``(filter, detection)`` pair's filter with its detection (module docstring)."""
     batch, rest = [], []
     for f, det in pairs:
-        (batch if type(f) is EKF else rest).append((f, det))
+        (batch if type(f) is EKF and f.iterations == 1 else rest).append((f, det))
     if len(batch) < _MIN_BATCH or len({np.size(d.z) for _, d in batch}) != 1:
         rest, batch = list(pairs), []
     for f, det in rest:

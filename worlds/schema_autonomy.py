@@ -111,6 +111,10 @@ class TrackingSpec(Strict):
                                           "lets a pointed camera confirm or reject it)")
     search_speed: float = Field(8.0, gt=0, le=100, description="growth of the region a lost (or cued) target is "
                                                                "searched in, m/s per axis")
+    swap_probability: float = Field(0.02, ge=0, lt=1, description="probability that the car under a track is another "
+                                    "one since the track's last class reading (a swap where cars pass close): old "
+                                    "readings are discounted so a swapped track's class evidence turns in a few "
+                                    "readings; 0 keeps every reading")
 
     @model_validator(mode="after")
     def _m_of_n(self) -> TrackingSpec:

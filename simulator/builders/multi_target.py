@@ -64,7 +64,8 @@ def identity_config(world: World, uav: UavSpec, network: Any = None) -> Identity
         background=background_frequencies([_classes(g) for g in others],
                                           {k: len(v) for k, v in CAR_ATTRIBUTES.items()}),
         background_density=max(len(others), 1) / area,
-        search_speed=spec.search_speed, min_probability=spec.min_target_probability)
+        search_speed=spec.search_speed, min_probability=spec.min_target_probability,
+        swap_probability=spec.swap_probability)
 
 
 def _multi_config(uav: UavSpec) -> MultiTrackerConfig:

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from autonomy.estimation.tracking.identity import (IdentityConfig, TargetIdentity, background_frequencies,
-                                                   track_evidence)
+from autonomy.estimation.tracking.identity import (IdentityConfig, TargetIdentity, accumulate_readings,
+                                                   background_frequencies, track_evidence)
 from autonomy.sensing.measurement import ClassMeasurement
 
 # three colours; the target is colour 2; the background is 60 % colour 0, 30 % colour 1, 10 % colour 2
@@ -141,3 +141,67 @@ def test_bad_config_is_refused():
         _config(background_density=0.0)
     with pytest.raises(ValueError, match="sum"):
         IdentityConfig(target_classes={}, background={"colour": np.array([0.5, 0.4])})
+
+
+def test_discounted_readings_equal_the_forward_recursion_by_enumeration():
+    """With swap probability ε the accumulated log-likelihood is log P(o₁…o_t | the current car is of class c) of the
+    Markov chain c₁ → … → c_t (stay with 1 − ε, else a car drawn from π), computed here over every class sequence."""
+    import itertools
+
+    pi = np.array([0.5, 0.3, 0.2])
+    C = np.array([[0.8, 0.1, 0.1], [0.15, 0.7, 0.15], [0.1, 0.2, 0.7]])
+    eps = 0.1
+    T = (1 - eps) * np.eye(3) + eps * np.outer(np.ones(3), pi)  # T[a, b] = P(c_{k+1} = b | c_k = a)
+    obs = [0, 0, 2, 1]
+    ell = None
+    for o in obs:
+        ell = accumulate_readings(ell, np.log(C[:, o]), pi, eps)
+    for c in range(3):
+        total = 0.0
+        for seq in itertools.product(range(3), repeat=len(obs) - 1):
+            path = (*seq, c)
+            p = pi[path[0]] * math.prod(T[a, b] for a, b in itertools.pairwise(path))
+            total += p * math.prod(C[k, o] for k, o in zip(path, obs, strict=True))
+        assert ell[c] == pytest.approx(math.log(total / pi[c]), rel=1e-12)
+    plain = None
+    for o in obs:
+        plain = accumulate_readings(plain, np.log(C[:, o]), pi, 0.0)
+    np.testing.assert_allclose(plain, np.log(C[:, obs]).sum(axis=1), rtol=1e-12)
+
+
+@pytest.mark.parametrize("eps,most", [(0.02, 3), (0.0, 45)])
+def test_a_track_that_swapped_onto_another_colour_loses_its_evidence(eps, most):
+    """40 readings of the target's colour, then the track carries a car of another colour: with ε = 0.02 its
+    evidence turns negative within 3 readings; without discounting it takes about as many readings as it had."""
+    cfg = IdentityConfig(target_classes={"colour": 1}, background={"colour": np.array([0.7, 0.1, 0.2])},
+                         swap_probability=eps)
+    C = np.array([[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]])
+    ell = None
+    for _ in range(40):
+        ell = accumulate_readings(ell, np.log(C[:, 1]), cfg.background["colour"], eps)
+    assert track_evidence({"colour": ell}, cfg) > 1.0
+    turned = None
+    for k in range(1, 60):
+        ell = accumulate_readings(ell, np.log(C[:, 2]), cfg.background["colour"], eps)
+        if track_evidence({"colour": ell}, cfg) < 0:
+            turned = k
+            break
+    assert turned is not None and turned <= most
+    if eps == 0.0:
+        assert turned >= 35
+
+
+def test_a_target_track_whose_readings_turn_moves_the_search_centre_to_it():
+    """The target's track reads another car's class (it swapped): once it is less likely the target than "in no
+    track", the target is searched for from where that track is, not from the old cue."""
+    ident = TargetIdentity(_config(background_density=1e-5, search_speed=5.0))
+    ident.cue(0.0, np.zeros(2), sigma_m=10.0)
+    ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    where = (20.0, np.array([150.0, 40.0]), np.array([0.0, 0.0]), np.eye(2) * 9.0)
+    ident.read(1, 1.0, where=lambda: where)
+    np.testing.assert_allclose(ident.search_estimate(20.0)[0], [0.0, 0.0])  # still likelier: the cue stays
+    ident.read(1, -8.0, where=lambda: where)
+    assert ident.probability(1) < ident.w_none
+    mean, S = ident.search_estimate(20.0)
+    np.testing.assert_allclose(mean, [150.0, 40.0])
+    np.testing.assert_allclose(S, np.eye(2) * 9.0)

@@ -146,3 +146,41 @@ def test_gated_estimator_sees_only_the_target_tracks_detections():
     assert inner.seen, "the target's detections reach the wrapped estimator"
     assert all(np.linalg.norm(d.z - cars[0]) < 20 for d in inner.seen)
     assert est.target_track_id is not None and est.track_reports()
+
+
+def _precise(xy, t, sigma=0.3) -> Detection:
+    return Detection(z=np.asarray(xy, float), R=np.eye(2) * sigma**2, t_meas=t, t_arrival=t, sensor_id="s",
+                     p_sensor_W=np.array([0.0, 0.0, 100.0]), kind="box")
+
+
+def test_cars_stopped_side_by_side_keep_two_tracks():
+    """Two cars stopped 3 m apart (inside the 4 m merge distance), each detected on every scan: two cars, not one
+    car's duplicate tracks, since every scan updates both with different detections."""
+    rng = np.random.default_rng(3)
+    tr = _tracker()
+    cars = [np.array([0.0, 0.0]), np.array([3.0, 0.0])]
+    for k in range(40):
+        t = 0.5 * k
+        tr.step(t, [_precise(c + rng.normal(0, 0.3, 2), t) for c in cars])
+    live = [x for x in tr.tracks if x.confirmed]
+    assert tr.merges == 0 and len(live) == 2
+    ends = sorted(float(x.filter.x[0]) for x in live)
+    assert abs(ends[0] - 0.0) < 0.5 and abs(ends[1] - 3.0) < 0.5
+
+
+def test_two_tracks_on_one_car_are_merged():
+    """A duplicate of a car's track (same estimate, same updating scans) is merged into the older one."""
+    import copy
+
+    rng = np.random.default_rng(4)
+    tr = _tracker()
+    car = np.array([10.0, -5.0])
+    for k in range(10):
+        tr.step(0.5 * k, [_precise(car + rng.normal(0, 0.3, 2), 0.5 * k)])
+    (orig,) = [x for x in tr.tracks if x.confirmed]
+    dup = copy.deepcopy(orig)
+    dup.track_id = 99
+    tr.tracks.append(dup)
+    tr.identity.confirmed(99, orig.filter.t, orig.filter.x[[0, 2]], np.eye(2), 0.0)
+    tr.step(5.0, [_precise(car + rng.normal(0, 0.3, 2), 5.0)])
+    assert tr.merges == 1 and [x.track_id for x in tr.tracks if x.confirmed] == [orig.track_id]

@@ -11,7 +11,14 @@ Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` 
   ``c_T``); under every other hypothesis track k is a background car, of likelihood ``Σ_c π(c) exp ℓ(c)`` with the
   background population's class frequencies ``π``. The track's evidence is ``E_k = Σ_attributes [ℓ(c_T) −
   log Σ_c π(c) exp ℓ(c)]`` (:func:`track_evidence`) and ``w_k ∝ (continuity weight) · exp E_k``. Many readings of
-  a look-alike's class therefore raise its weight by at most ``1 / π(c_T)``, however often it is seen. A teammate
+  a look-alike's class therefore raise its weight by at most ``1 / π(c_T)``, however often it is seen. The car under a
+  track may change (two cars pass within the sensors' resolution and the assignment swaps them): with probability
+  ``ε`` (``swap_probability``) per reading the track's car is since its last reading a car drawn from the background,
+  a hidden Markov chain over the car's class whose forward recursion is, per attribute,
+  ``ℓₜ(c) = log C[c, oₜ] + log((1 − ε) e^{ℓₜ₋₁(c)} + ε Σ_c' π(c') e^{ℓₜ₋₁(c')})`` (:func:`accumulate_readings`;
+  ``ℓ(c)`` is then the log-likelihood of the readings given the track's *current* car is of class ``c``, and ``ε = 0``
+  gives the sum above). Old readings are discounted: a track that swapped from the target to a car of another colour
+  loses its evidence after two or three readings of the new car instead of as many as it had of the old one. A teammate
   may add a track's evidence from the UAV's own sensors to its own belief;
 - **a confirmed new track** j (position ``x_j``, covariance ``P_j``, evidence ``E_j``): under every existing
   hypothesis ``H_k`` (and under ``H_0`` too, if the target stays unseen) the new track is a background car, of
@@ -34,12 +41,13 @@ there is none and the target is believed to be near ``μ`` (the search centre).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "background_frequencies", "track_evidence"]
+__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "accumulate_readings", "background_frequencies",
+           "track_evidence"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -60,6 +68,8 @@ class IdentityConfig:
         How fast the believed region of a target in no track grows (m/s per axis, > 0): a car's typical speed.
     min_probability : float
         Smallest probability in (0, 1] of the most probable track for it to be taken as the target.
+    swap_probability : float
+        Probability in [0, 1) that the car under a track changed since its last class reading (module docstring).
     """
 
     target_classes: Mapping[str, int]
@@ -67,12 +77,15 @@ class IdentityConfig:
     background_density: float = 1e-4
     search_speed: float = 8.0
     min_probability: float = 0.2
+    swap_probability: float = 0.02
 
     def __post_init__(self) -> None:
         if not self.background_density > 0:
             raise ValueError(f"IdentityConfig.background_density must be > 0 cars/m², got {self.background_density!r}")
         if not self.search_speed > 0:
             raise ValueError(f"IdentityConfig.search_speed must be > 0 m/s, got {self.search_speed!r}")
+        if not 0 <= self.swap_probability < 1:
+            raise ValueError(f"IdentityConfig.swap_probability must be in [0, 1), got {self.swap_probability!r}")
         if not 0 < self.min_probability <= 1:
             raise ValueError(f"IdentityConfig.min_probability must be in (0, 1], got {self.min_probability!r}")
         for name, freq in self.background.items():
@@ -108,6 +121,24 @@ class SearchCentre:
         dt = max(0.0, t - self.t)
         mean = self.p + self.v * min(dt, 10.0)
         return mean, self.P + np.eye(2) * (search_speed * dt) ** 2
+
+
+def accumulate_readings(previous: np.ndarray | None, step: np.ndarray, frequencies: np.ndarray | None,
+                        swap_probability: float) -> np.ndarray:
+    """A track's per-class log-likelihood after one more reading of log-likelihood ``step`` (per class), from
+    ``previous`` (None: the first reading): ``ℓₜ(c) = step(c) + log((1 − ε) e^{ℓₜ₋₁(c)} + ε Σ_c' π(c') e^{ℓₜ₋₁(c')})``
+    with ``ε = swap_probability`` and ``π = frequencies`` (uniform if None), module docstring."""
+    step = np.asarray(step, dtype=float)
+    if previous is None:
+        return step.copy()
+    prev = np.asarray(previous, dtype=float)
+    if swap_probability == 0.0:
+        return prev + step
+    freq = np.full(prev.size, 1.0 / prev.size) if frequencies is None else np.asarray(frequencies, dtype=float)
+    top = float(prev.max())
+    e = np.exp(prev - top)
+    mixed = (1.0 - swap_probability) * e + swap_probability * float(freq @ e)
+    return step + top + np.log(mixed)
 
 
 def track_evidence(loglik: Mapping[str, np.ndarray], config: IdentityConfig) -> float:
@@ -174,17 +205,26 @@ class TargetIdentity:
         self.evidence[track_id] = min(evidence, 50.0)
         self._normalise()
 
-    def read(self, track_id: int, evidence: float) -> None:
+    def read(self, track_id: int, evidence: float,
+             where: Callable[[], tuple[float, np.ndarray, np.ndarray, np.ndarray]] | None = None) -> None:
         """Track ``track_id``'s class evidence is now ``evidence`` (:func:`track_evidence` of all its readings): its
-        weight changes by ``exp(evidence − previous evidence)``."""
+        weight changes by ``exp(evidence − previous evidence)``. If that takes the track from likelier the target than
+        ``H_0`` to less likely (its readings turned: it swapped onto another car), the target is believed to be near
+        where the track is, ``where()`` = (t, p, v, P) as for :meth:`deleted`, and searched for from there."""
         if track_id not in self.weights:
             return
         new = max(min(float(evidence), 50.0), -50.0)
         change = new - self.evidence.get(track_id, 0.0)
         self.evidence[track_id] = new
         if change != 0.0:
+            was_likelier = self.weights[track_id] > self.w_none
             self.weights[track_id] *= math.exp(change)
             self._normalise()
+            if was_likelier and self.weights[track_id] <= self.w_none and where is not None:
+                t, p, v, P = where()
+                self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(),
+                                           v=np.asarray(v, dtype=float)[:2].copy(),
+                                           P=np.asarray(P, dtype=float)[:2, :2].copy())
 
     def deleted(self, track_id: int, t: float, p: np.ndarray, v: np.ndarray, P: np.ndarray) -> None:
         """Track ``track_id`` was dropped at ``t`` (s) with last estimate ``p`` (m), ``v`` (m/s), position

@@ -12,7 +12,8 @@ Per scan (the detections of one sensor taken at one time; filters predict to the
    can no longer be reached;
 4. the position fixes that no track took start tentative tracks in pairs with earlier ones (:mod:`.pairing`);
 5. two confirmed tracks on one car (closer than ``merge_distance_m`` and ``merge_speed_mps``) become one: the older
-   stays, with the other's identity weight.
+   stays, with the other's identity weight; two tracks that one of their last scans updated with different
+   detections are two cars (two cars stopped side by side at a junction) and stay apart.
 
 :meth:`MultiTargetTracker.step` returns the estimate of the track believed to be the target, or, while no track is,
 where the target is believed to be (the cue, or the lost target track's estimate grown with time) so guidance searches
@@ -37,7 +38,7 @@ from interfaces.state import TargetEstimate, TrackReport
 from .batch_update import update_pairs
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
-from .identity import IdentityConfig, TargetIdentity, track_evidence
+from .identity import IdentityConfig, TargetIdentity, accumulate_readings, track_evidence
 from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -65,7 +66,8 @@ class MultiTrackerConfig:
     clutter_density : float
         JPDA: false alarms per unit of measurement space (e.g. per m·rad for a range-azimuth radar), > 0.
     merge_distance_m, merge_speed_mps : float
-        Two confirmed tracks closer than this in position (m) and velocity (m/s) are one car, > 0.
+        Two confirmed tracks closer than this in position (m) and velocity (m/s) are one car, > 0 (unless a recent
+        scan updated both with different detections).
     max_tracks : int
         Most live tracks (>= 1); no new track starts beyond it (counted in ``starts_refused``).
     """
@@ -314,6 +316,7 @@ class MultiTargetTracker:
     def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
         track.last_update_t = t_meas
         track.missed = 0
+        track.took(det.sensor_id, t_meas, det)
         got = self._step_detections.get(track.track_id)
         if got is None:
             self._step_detections[track.track_id] = [det]
@@ -332,13 +335,14 @@ class MultiTargetTracker:
                 by_attr[c.attribute] = by_attr.get(c.attribute, np.full(lik.size, none_weight)) + w * lik
         if not by_attr:
             return
+        ident = self.identity.config
         for name, lik in by_attr.items():
-            prev = track.class_loglik.get(name)
             step = np.log(np.maximum(lik, 1e-300))
-            track.class_loglik[name] = step if prev is None else prev + step
+            track.class_loglik[name] = accumulate_readings(track.class_loglik.get(name), step,
+                                                           ident.background.get(name), ident.swap_probability)
         track.evidence = track_evidence(track.class_loglik, self.identity.config)
         if track.confirmed:
-            self.identity.read(track.track_id, track.evidence)
+            self.identity.read(track.track_id, track.evidence, where=lambda: self._where(track))
 
     def _confirmations(self, live: Sequence[Track], hit: set[int], t_meas: float) -> None:
         m, n = self.multi.confirm_m, self.multi.confirm_n
@@ -377,8 +381,11 @@ class MultiTargetTracker:
             self.tracks.remove(track)
             self.dropped_lost += 1
             if track.confirmed:
-                est = self._estimate(track)
-                self.identity.deleted(track.track_id, track.filter.t, est.p_W, est.v_W, est.P[:2, :2])
+                self.identity.deleted(track.track_id, *self._where(track))
+
+    def _where(self, track: Track) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        est = self._estimate(track)
+        return est.t, est.p_W, est.v_W, est.P[:2, :2]
 
     def _merge(self) -> None:
         confirmed = [tr for tr in self.tracks if tr.confirmed]
@@ -394,7 +401,7 @@ class MultiTargetTracker:
             if id(ta) in gone or id(tb) in gone:
                 continue
             dv = ta.filter.x[self._iv] - tb.filter.x[self._iv]
-            if float(np.hypot(dv[0], dv[1])) >= self.multi.merge_speed_mps:
+            if float(np.hypot(dv[0], dv[1])) >= self.multi.merge_speed_mps or ta.seen_apart_from(tb):
                 continue
             keep, drop = (ta, tb) if ta.track_id < tb.track_id else (tb, ta)
             self.identity.merged(keep.track_id, drop.track_id)

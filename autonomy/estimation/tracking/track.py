@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 from autonomy.estimation.base import Filter
+
+RECENT_SCANS = 16
+"""How many of a track's last updating scans it remembers (:attr:`Track.recent`)."""
 
 __all__ = ["Track"]
 
@@ -39,6 +44,10 @@ class Track:
         track (:func:`~.identity.track_evidence`).
     class_loglik : dict[str, np.ndarray]
         Per attribute, the log-likelihood of those readings for every class.
+    recent : OrderedDict[tuple, int]
+        The last :data:`RECENT_SCANS` scans that updated the track, ``(sensor id, time) → id`` of the detection it
+        took: two tracks updated by different detections of one scan are two cars (a sensor reports a car once per
+        scan), which a merge must not join.
     """
 
     def __init__(self, filter: Filter, last_update_t: float, *, track_id: int = 0, hits: int = 1, scans: int = 1,
@@ -52,6 +61,18 @@ class Track:
         self.confirmed = bool(confirmed)
         self.evidence = 0.0
         self.class_loglik: dict = {}
+        self.recent: OrderedDict = OrderedDict()
+
+    def took(self, sensor_id: object, t_meas: float, detection: object) -> None:
+        """Remember that ``detection`` of the scan ``(sensor_id, t_meas)`` updated the track."""
+        self.recent[(sensor_id, float(t_meas))] = id(detection)
+        while len(self.recent) > RECENT_SCANS:
+            self.recent.popitem(last=False)
+
+    def seen_apart_from(self, other: Track) -> bool:
+        """Whether a scan both remember updated this track and ``other`` with different detections."""
+        a, b = (self.recent, other.recent) if len(self.recent) <= len(other.recent) else (other.recent, self.recent)
+        return any(b.get(key, det) != det for key, det in a.items())
 
     def __repr__(self) -> str:
         return (f"Track(id={self.track_id}, t={self.filter.t:.3f}, last_update_t={self.last_update_t:.3f}, "

@@ -14,7 +14,7 @@ The cache is untrusted input: a library is loaded only when its size and SHA-256
 in the sidecar ``<library>.json`` (written after the library was hashed, also by atomic rename). ``dlopen`` maps the
 file into the process, so a truncated library (a full disk, a copy cut short) would not raise an error but kill the
 process with SIGBUS on the first call into the missing pages; a library that does not match its sidecar, or has
-none, is compiled again with a warning. The check reads the library once (≈ 1 ms for an NMPC's 200 kB).
+none, is compiled again with a warning. The check reads the library once (2–6 ms for an NMPC's ≈ 0.6 MB).
 
 :class:`BufferedCall` calls a CasADi function on numpy arrays through ``Function.buffer`` (zero copy): the usual
 ``solver(x0=..., p=...)`` converts every numpy argument to a ``DM`` through SWIG, ≈ 40–60 µs for each vector of 160

@@ -10,6 +10,12 @@ version, the machine, the compiler and its flags: the first construction of a pr
 building the uncompiled solver first. Writers compile into a private temporary file and
 publish it with an atomic rename, so concurrent processes never see a half-written library.
 
+The cache is untrusted input: a library is loaded only when its size and SHA-256 equal those its writer recorded
+in the sidecar ``<library>.json`` (written after the library was hashed, also by atomic rename). ``dlopen`` maps the
+file into the process, so a truncated library (a full disk, a copy cut short) would not raise an error but kill the
+process with SIGBUS on the first call into the missing pages; a library that does not match its sidecar, or has
+none, is compiled again with a warning. The check reads the library once (2–6 ms for an NMPC's ≈ 0.6 MB).
+
 :class:`BufferedCall` calls a CasADi function on numpy arrays through ``Function.buffer`` (zero copy): the usual
 ``solver(x0=..., p=...)`` converts every numpy argument to a ``DM`` through SWIG, ≈ 40–60 µs for each vector of 160
 numbers, which made up ≈ 170 µs of a 1.1 ms NMPC solve.
@@ -22,6 +28,7 @@ or ``~/.cache/skytrack``); ``CC`` picks the compiler (default ``cc``).
 from __future__ import annotations
 
 import hashlib
+import json
 import logging
 import os
 import platform
@@ -40,7 +47,7 @@ __all__ = ["BufferedCall", "cache_dir", "compiled_nlpsol"]
 
 _LOG = logging.getLogger(__name__)
 _FLAGS = ("-O1", "-fPIC", "-shared")
-_KEY_FORMAT = "skytrack-nlpsol-2"  # bump when the key or the generated files change meaning
+_KEY_FORMAT = "skytrack-nlpsol-3"  # bump when the key or the generated files change meaning
 _warned: set[str] = set()
 
 
@@ -73,7 +80,7 @@ def compiled_nlpsol(name: str, plugin: str, nlp: dict, opts: dict) -> tuple[ca.F
     # the library holds nlp_hess_l already (the user's hess_lag when one was given)
     lib_opts = {k: v for k, v in opts.items() if k not in ("hess_lag", "jac_fg")}
     lib = cache_dir() / f"{name}_{_problem_key(plugin, nlp, opts, compiler)}.so"
-    if lib.exists():  # cached: the virtual-machine solver is never built
+    if lib.exists() and _verified(lib):  # cached: the virtual-machine solver is never built
         try:
             return ca.nlpsol(name, plugin, str(lib), lib_opts), True
         except RuntimeError as exc:  # a damaged library: compile it again
@@ -122,9 +129,76 @@ def _compile(solver: ca.Function, name: str, compiler: list[str], lib: Path) -> 
         if proc.returncode != 0:
             raise RuntimeError(f"{' '.join(compiler)} exited with {proc.returncode}: {proc.stderr.strip()[:500]}")
         lib.parent.mkdir(parents=True, exist_ok=True)
-        staged = Path(tempfile.mkstemp(dir=lib.parent, prefix=".tmp-", suffix=".so")[1])
-        shutil.copyfile(out, staged)
+        _publish(out, lib)
+
+
+def _sidecar(lib: Path) -> Path:
+    """The file recording ``lib``'s size and SHA-256 (``<library>.json``)."""
+    return lib.with_name(lib.name + ".json")
+
+
+def _digest(path: Path) -> tuple[int, str]:
+    """(size in bytes, SHA-256 hex) of a file's contents."""
+    h = hashlib.sha256()
+    size = 0
+    with path.open("rb") as f:
+        while chunk := f.read(1 << 20):
+            h.update(chunk)
+            size += len(chunk)
+    return size, h.hexdigest()
+
+
+def _verified(lib: Path) -> bool:
+    """Whether ``lib`` is the library its writer published: same size and SHA-256 as in its sidecar. Logs why not."""
+    side = _sidecar(lib)
+    try:
+        record = json.loads(side.read_text(encoding="utf-8"))
+        want = (int(record["size"]), str(record["sha256"]))
+        if record.get("format") != _KEY_FORMAT:
+            raise ValueError(f"format {record.get('format')!r}, expected {_KEY_FORMAT!r}")
+    except FileNotFoundError:
+        _LOG.warning("cached CasADi library %s has no checksum file %s: compiling it again", lib, side.name)
+        return False
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        _LOG.warning("checksum file %s of the cached CasADi library unreadable (%s): compiling it again", side, exc)
+        return False
+    try:
+        have = _digest(lib)
+    except OSError as exc:
+        _LOG.warning("cached CasADi library %s unreadable (%s): compiling it again", lib, exc)
+        return False
+    if have != want:
+        _LOG.warning("cached CasADi library %s is damaged (%d bytes, SHA-256 %s…; its writer recorded %d bytes, %s…): "
+                     "compiling it again", lib, have[0], have[1][:12], want[0], want[1][:12])
+        return False
+    return True
+
+
+def _publish(built: Path, lib: Path) -> None:
+    """Copy ``built`` into the cache as ``lib`` with its sidecar: the copy is hashed (what readers will check is what
+    landed on disk) and renamed into place, then the sidecar is written and renamed. A reader between the two renames
+    sees a library whose sidecar is missing or stale and compiles again: it never loads unverified bytes."""
+    lib.parent.mkdir(parents=True, exist_ok=True)
+    fd, staged_name = tempfile.mkstemp(dir=lib.parent, prefix=".tmp-", suffix=".so")
+    os.close(fd)
+    staged = Path(staged_name)
+    side_fd, side_name = tempfile.mkstemp(dir=lib.parent, prefix=".tmp-", suffix=".json")
+    os.close(side_fd)
+    try:
+        shutil.copyfile(built, staged)
+        with staged.open("rb+") as f:
+            os.fsync(f.fileno())
+        size, sha = _digest(staged)
+        with open(side_name, "w", encoding="utf-8") as f:
+            json.dump({"format": _KEY_FORMAT, "size": size, "sha256": sha}, f)
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(staged, lib)  # atomic: a concurrent reader sees no library or a whole one
+        os.replace(side_name, _sidecar(lib))
+    except BaseException:
+        staged.unlink(missing_ok=True)
+        Path(side_name).unlink(missing_ok=True)
+        raise
 
 
 class BufferedCall:

@@ -36,8 +36,11 @@ def _campaign(args: argparse.Namespace) -> int:
         print(f"skytrack campaign: {exc}", file=sys.stderr)
         return 2
     s = result.summary
+    redone = f", {len(result.redone)} of them redone: their stored files were damaged" if result.redone else ""
     print(f"\ncampaign {result.out_dir}: {s.runs} of {result.params.runs} runs recorded "
-          f"({result.ran} run now), {s.completed} completed, {s.failed} failed")
+          f"({result.ran} run now{redone}), {s.completed} completed, {s.failed} failed")
+    for index, why in sorted(result.redone.items()):
+        print(f"  run {index} redone: {why}", file=sys.stderr)
     if s.metrics:
         print(format_table(s))
     for index, error in s.failures:

@@ -87,6 +87,9 @@ class RunReport:
         The run's ``metrics.json`` flattened to dotted keys (``targets.car1.uav1.position_rmse_m``).
     run_dir : str
         Run directory relative to the campaign directory.
+    files : dict | None
+        ``{path in the run directory: [size in bytes, SHA-256 hex]}`` of the run's files when the campaign process
+        journaled it, checked on resume (:mod:`simulator.campaign.verify`); None in lines written before it existed.
     """
 
     index: int
@@ -96,10 +99,18 @@ class RunReport:
     wall_time_s: float
     metrics: dict[str, Any] = field(default_factory=dict)
     run_dir: str = ""
+    files: dict[str, list] | None = None
 
     def __post_init__(self) -> None:
         if self.status not in ("completed", "error", "interrupted"):
             raise ValueError(f"RunReport.status must be completed, error or interrupted, got {self.status!r}")
+        for name, kind in (("index", int), ("seed", int), ("metrics", dict), ("run_dir", str)):
+            if not isinstance(getattr(self, name), kind) or isinstance(getattr(self, name), bool):
+                raise ValueError(f"RunReport.{name} must be {kind.__name__}, got {getattr(self, name)!r:.60}")
+        if self.files is not None and not (isinstance(self.files, dict) and all(
+                isinstance(k, str) and isinstance(v, list) and len(v) == 2 and isinstance(v[0], int)
+                and isinstance(v[1], str) for k, v in self.files.items())):
+            raise ValueError(f"RunReport.files must map paths to [size, sha256], got {self.files!r:.60}")
 
     @property
     def finished(self) -> bool:
@@ -111,7 +122,7 @@ class RunReport:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunReport:
-        keys = ("index", "seed", "status", "error", "wall_time_s", "metrics", "run_dir")
+        keys = ("index", "seed", "status", "error", "wall_time_s", "metrics", "run_dir", "files")
         return cls(**{k: data[k] for k in keys if k in data})
 
 

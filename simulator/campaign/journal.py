@@ -1,20 +1,31 @@
 """The campaign directory's journal: ``campaign.json`` (parameters) and the append-only ``campaign.jsonl`` (one line per
 finished run), written by the parent process only and flushed line by line, so a campaign killed at any moment resumes
 with every finished run kept and no run recorded twice.
+
+The journal and the run directories are untrusted on resume: a line that cannot be read (a torn last line, garbage,
+a run index outside the campaign) is dropped with a warning and its run runs again, and every journaled run whose
+stored files are damaged (:mod:`simulator.campaign.verify`) runs again too; its new line, appended later, supersedes
+the old one.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import logging
 import os
 import shutil
 from pathlib import Path
 from typing import Any
 
 from simulator.campaign.config import CampaignError, CampaignParams, RunReport, run_dir_name
+from simulator.campaign.verify import damage, manifest
 from simulator.record import atomic_write_text, json_default
 
 __all__ = ["CampaignJournal"]
+
+_LOG = logging.getLogger(__name__)
+REJECTED_FILE = "campaign.rejected.jsonl"
 
 PARAMS_FILE = "campaign.json"
 JOURNAL_FILE = "campaign.jsonl"
@@ -33,8 +44,9 @@ class CampaignJournal:
 
     Notes
     -----
-    A torn last line (the process was killed while writing it) is cut off on open; a run journaled twice (which the
-    parent never does) would count once, the first record winning.
+    Lines that cannot be read are moved to ``campaign.rejected.jsonl`` on open (the journal is rewritten atomically
+    without them) and their runs run again. A run journaled twice counts once, the last line winning: a run is
+    journaled again only when it was redone because its stored files were damaged.
     """
 
     def __init__(self, out_dir: Path, params: CampaignParams) -> None:
@@ -66,22 +78,45 @@ class CampaignJournal:
         if not self.path.exists():
             return {}
         data = self.path.read_bytes()
-        end = data.rfind(b"\n") + 1
-        if end < len(data):  # a torn final line from a killed writer: drop it, keep every complete line
-            with open(self.path, "r+b") as f:
-                f.truncate(end)
+        lines = data.split(b"\n")
+        torn = lines.pop()  # after the last newline: empty, or a line a killed writer did not finish
         reports: dict[int, RunReport] = {}
-        for n, line in enumerate(data[:end].decode("utf-8").splitlines(), start=1):
-            if not line.strip():
+        kept: list[bytes] = []
+        rejected: list[tuple[int, bytes, str]] = []
+        for n, raw in enumerate(lines, start=1):
+            if not raw.strip():
                 continue
             try:
-                rep = RunReport.from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-                raise CampaignError(f"{self.path}:{n}: unreadable run record ({exc})") from None
-            if not 0 <= rep.index < self.params.runs:
-                raise CampaignError(f"{self.path}:{n}: run index {rep.index} outside 0..{self.params.runs - 1}")
-            reports.setdefault(rep.index, rep)
+                rep = RunReport.from_json(json.loads(raw.decode("utf-8")))
+                if not 0 <= rep.index < self.params.runs:
+                    raise ValueError(f"run index {rep.index} outside 0..{self.params.runs - 1}")
+            except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+                rejected.append((n, raw, f"unreadable run record ({type(exc).__name__}: {exc})"))
+                continue
+            kept.append(raw)
+            reports[rep.index] = rep  # a later line is a redo of a damaged run: it wins
+        if torn:
+            rejected.append((len(lines) + 1, torn, f"its last line was cut off ({len(torn)} bytes, no newline)"))
+        for n, _raw, why in rejected:
+            _LOG.warning("%s:%d: %s: dropped, its run runs again", self.path, n, why)
+        if rejected:
+            with open(self.out_dir / REJECTED_FILE, "ab") as f:  # kept for inspection, never read
+                f.writelines(raw + b"\n" for _, raw, _ in rejected)
+            atomic_write_text(self.path, "".join(line.decode("utf-8") + "\n" for line in kept))
         return reports
+
+    def drop_damaged(self) -> dict[int, str]:
+        """Forget every journaled run whose stored files are damaged (they run again); returns what is wrong with
+        each, by index, after logging it."""
+        damaged = {}
+        for index, report in sorted(self.reports.items()):
+            why = damage(self.run_dir(index), report)
+            if why is not None:
+                damaged[index] = why
+                _LOG.warning("run %d of %s is redone: %s", index, self.out_dir, why)
+        for index in damaged:
+            del self.reports[index]
+        return damaged
 
     def finished(self) -> set[int]:
         """Indices already recorded (completed or failed); they are not run again."""
@@ -103,11 +138,13 @@ class CampaignJournal:
             shutil.rmtree(path)
 
     def record(self, report: RunReport) -> None:
-        """Append one finished run and flush it to disk (``interrupted`` runs are not recorded: they run again)."""
+        """Append one finished run, with the sizes and SHA-256 of its run directory's files, and flush it to disk
+        (``interrupted`` runs are not recorded: they run again)."""
         if not report.finished:
             return
         if report.index in self.reports:
             raise CampaignError(f"run {report.index} is already recorded in {self.path}")
+        report = dataclasses.replace(report, files=manifest(self.run_dir(report.index)))
         self._file.write(json.dumps(report.to_json(), default=json_default, allow_nan=True) + "\n")
         self._file.flush()
         os.fsync(self._file.fileno())

@@ -8,7 +8,9 @@
 Campaign directory::
 
     campaign.json        world, resolved overrides, seed, duration, N (a resume must match them)
-    campaign.jsonl       one line per finished run: index, seed, status, error, wall time, flat metrics
+    campaign.jsonl       one line per finished run: index, seed, status, error, wall time, flat metrics, and the
+                         size and SHA-256 of each file of its run directory (checked on resume: a damaged run is
+                         run again)
     runs/run-00042/      the run directory of run 42 (see simulator.record)
     summary.json, summary.md
                          per-metric mean, standard deviation, 95 % confidence interval of the mean, n
@@ -48,6 +50,9 @@ class CampaignResult:
         Aggregates over the completed runs (also in ``summary.json`` / ``summary.md``).
     ran : int
         Runs executed by this call (the others were recorded by an earlier, interrupted call).
+    redone : dict[int, str]
+        Runs journaled by an earlier call whose stored files were damaged, so this call ran them again: what was
+        wrong with each, by index.
     """
 
     out_dir: Path
@@ -55,6 +60,7 @@ class CampaignResult:
     reports: tuple[RunReport, ...]
     summary: CampaignSummary
     ran: int
+    redone: dict[int, str] = dataclasses.field(default_factory=dict)
 
     @property
     def missing(self) -> list[int]:
@@ -97,6 +103,7 @@ def run_campaign(config: CampaignConfig) -> CampaignResult:
     run_fn = config.run_fn or run_one
     backend = _backend(config, config.runs)  # before touching the directory: a missing Ray fails here
     with CampaignJournal(config.out_dir, params) as journal:
+        redone = journal.drop_damaged()
         pending = journal.pending()
         out = journal.out_dir.resolve()
         tasks = []
@@ -109,7 +116,8 @@ def run_campaign(config: CampaignConfig) -> CampaignResult:
         reports = tuple(journal.ordered())
     summary = summarize(reports)
     write_summary(summary, config.out_dir, title=f"{loaded.name}, {params.runs} runs, seed {params.seed}")
-    return CampaignResult(out_dir=config.out_dir, params=params, reports=reports, summary=summary, ran=ran)
+    return CampaignResult(out_dir=config.out_dir, params=params, reports=reports, summary=summary, ran=ran,
+                          redone=redone)
 
 
 def _execute(config: CampaignConfig, backend: Backend, tasks: list[RunTask], journal: CampaignJournal,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 
 import casadi as ca
@@ -54,7 +56,9 @@ def test_compiled_solver_matches_the_virtual_machine_and_is_cached(cache):
     other = dict(nlp, g=nlp["x"][0] - nlp["x"][1])
     compiled_nlpsol("rb", "sqpmethod", other, _QUIET)  # another problem: another library
     assert len(list(cache.glob("rb_*.so"))) == 2
-    assert not [p for p in cache.iterdir() if p.suffix != ".so" or p.name.startswith(".tmp")]  # nothing else left
+    left = sorted(p.name for p in cache.iterdir())
+    assert all(n.endswith((".so", ".so.json")) and not n.startswith(".tmp") for n in left), left  # nothing else
+    assert len(left) == 4  # two libraries, each with its checksum file
 
 
 def test_a_damaged_cached_library_is_compiled_again(cache):
@@ -134,3 +138,73 @@ def test_compiled_nmpc_commands_equal_the_uncompiled_ones(cache):
         commands[compiled] = np.array(out)
     np.testing.assert_allclose(commands[True], commands[False], rtol=0, atol=1e-9)
     assert list(cache.glob("nmpc_*.so"))
+
+
+_LOAD_AND_SOLVE = """
+import logging, sys
+import casadi as ca
+import numpy as np
+from autonomy.guidance.codegen import BufferedCall, compiled_nlpsol
+logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(message)s")
+x, p = ca.SX.sym("x", 2), ca.SX.sym("p")
+nlp = {"x": x, "p": p, "f": (x[0] - p) ** 2 + 10 * (x[1] - x[0] ** 2) ** 2, "g": x[0] + x[1]}
+opts = {"print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
+        "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False}}
+solver, ok = compiled_nlpsol("rbs", "sqpmethod", nlp, opts)
+sol = BufferedCall(solver)(x0=[0.0, 0.0], p=1.0, lbx=[-np.inf] * 2, ubx=[np.inf] * 2, lbg=-np.inf, ubg=1.5)
+print("compiled", ok, "x0+x1 %.9f" % sum(sol["x"]))
+"""
+
+
+def _load_in_subprocess(cache_root):
+    """Build or load the cached library in a fresh process: a library that crashes the loader must not take the
+    test session down, and must not be mapped into it either."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = dict(os.environ, SKYTRACK_CACHE_DIR=str(cache_root))
+    env.pop("CC", None)
+    root = Path(__file__).resolve().parents[2]
+    return subprocess.run([sys.executable, "-c", _LOAD_AND_SOLVE], cwd=root, env=env, capture_output=True, text=True,
+                          timeout=300, check=False)
+
+
+def _truncate(lib):
+    with lib.open("r+b") as f:  # in place, as a copy cut short or a full disk leaves it
+        f.truncate(lib.stat().st_size // 2)
+
+
+def _flip_middle(lib):
+    data = bytearray(lib.read_bytes())
+    mid = len(data) // 2
+    data[mid:mid + 64] = bytes(b ^ 0xFF for b in data[mid:mid + 64])
+    with lib.open("r+b") as f:
+        f.write(data)
+
+
+def _drop_sidecar(lib):
+    lib.with_name(lib.name + ".json").unlink()
+
+
+@pytest.mark.parametrize("damage, says", [(_truncate, "is damaged"), (_flip_middle, "is damaged"),
+                                          (_drop_sidecar, "has no checksum file")],
+                         ids=["truncated", "corrupted", "no-sidecar"])
+def test_a_damaged_cached_library_is_rebuilt_instead_of_crashing_the_process(tmp_path, damage, says):
+    first = _load_in_subprocess(tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert "compiled True x0+x1 1.500000000" in first.stdout
+    (lib,) = (tmp_path / "casadi").glob("rbs_*.so")
+    side = json.loads(lib.with_name(lib.name + ".json").read_text())
+    assert side["size"] == lib.stat().st_size
+    assert side["sha256"] == hashlib.sha256(lib.read_bytes()).hexdigest()
+    damage(lib)
+    again = _load_in_subprocess(tmp_path)
+    assert again.returncode == 0, f"exit {again.returncode}: {again.stderr}"  # SIGBUS was -7 (a shell's 135)
+    assert "compiled True x0+x1 1.500000000" in again.stdout
+    assert f"cached CasADi library {lib} {says}" in again.stderr
+    assert hashlib.sha256(lib.read_bytes()).hexdigest() == json.loads(
+        lib.with_name(lib.name + ".json").read_text())["sha256"]  # republished whole, with a matching sidecar
+    third = _load_in_subprocess(tmp_path)
+    assert third.returncode == 0 and "WARNING" not in third.stderr  # loaded from the cache, verified

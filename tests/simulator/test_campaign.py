@@ -1,8 +1,10 @@
 """Monte Carlo campaigns: seeds from the campaign seed and run index, every finished run journalled at once, a killed
 campaign resumed to exactly N runs, crashes recorded, aggregates with Student-t intervals, Ray when installed."""
 
+import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -117,3 +119,112 @@ def test_ray_auto_runs_the_campaign_on_a_local_ray(tmp_path):
                                       ray_address="auto", workers=2))
     assert sorted(r.index for r in res.reports) == [0, 1]
     assert all(r.status == "completed" for r in res.reports)
+
+
+def _stored_runs_campaign(out: Path, runs: int = 4) -> CampaignConfig:
+    from tests.simulator.user_modules.stored_runs import write_run
+
+    return CampaignConfig(world="demo", runs=runs, out_dir=out, seed=9, duration_s=1.0, workers=1, progress=False,
+                          run_fn=write_run)
+
+
+def _damage_three_runs(out: Path, truncate_chunk: bool = False) -> None:
+    metrics = out / "runs" / "run-00001" / "metrics.json"
+    metrics.write_text(metrics.read_text()[:10])  # truncated
+    chunk = out / "runs" / "run-00002" / "timeseries" / "uav_truth" / "part-00000.npy"
+    data = bytearray(chunk.read_bytes())
+    if truncate_chunk:
+        del data[len(data) // 2:]
+    else:
+        data[200:232] = b"\xff" * 32  # a corrupted record chunk, same size: it still loads, its hash differs
+    chunk.write_bytes(bytes(data))
+    shutil.rmtree(out / "runs" / "run-00003")  # a deleted run directory
+
+
+def test_a_resume_redoes_the_runs_whose_stored_files_are_damaged(tmp_path, caplog):
+    out = tmp_path / "c"
+    first = run_campaign(_stored_runs_campaign(out))
+    assert first.ran == 4 and not first.redone
+    files = {r["index"]: r["files"] for r in _journal(out)}
+    assert sorted(files[0]) == ["metrics.json", "run.json", "timeseries/uav_truth/part-00000.npy"]
+    chunk = out / "runs" / "run-00000" / "timeseries" / "uav_truth" / "part-00000.npy"
+    assert files[0]["timeseries/uav_truth/part-00000.npy"] == [chunk.stat().st_size,
+                                                               hashlib.sha256(chunk.read_bytes()).hexdigest()]
+    _damage_three_runs(out)
+    chunk2 = out / "runs" / "run-00002" / "timeseries" / "uav_truth" / "part-00000.npy"
+    damaged_sha = hashlib.sha256(chunk2.read_bytes()).hexdigest()
+    with caplog.at_level("WARNING", logger="simulator.campaign.journal"):
+        again = run_campaign(_stored_runs_campaign(out))
+    assert again.ran == 3
+    assert again.redone == {
+        1: f"metrics.json has 10 bytes, {files[1]['metrics.json'][0]} when the run finished",
+        2: "timeseries/uav_truth/part-00000.npy differs from the file the run wrote "
+           f"(SHA-256 {damaged_sha[:12]}…, was {files[2]['timeseries/uav_truth/part-00000.npy'][1][:12]}…)",
+        3: "its run directory run-00003 is missing"}
+    assert f"run 3 of {out} is redone: its run directory run-00003 is missing" in caplog.text
+    for i in range(4):  # every run whole again, its metrics loadable
+        assert json.loads((out / "runs" / f"run-{i:05d}" / "metrics.json").read_text())["complete"] is True
+    third = run_campaign(_stored_runs_campaign(out))
+    assert third.ran == 0 and not third.redone  # the redone runs' new journal lines win over the damaged ones
+    assert sorted(r.index for r in third.reports) == [0, 1, 2, 3]
+
+
+def test_runs_journaled_without_file_hashes_are_checked_by_loading(tmp_path):
+    out = tmp_path / "c"
+    run_campaign(_stored_runs_campaign(out))
+    lines = _journal(out)
+    for line in lines:
+        del line["files"]  # a journal written before the hashes existed
+    (out / "campaign.jsonl").write_text("".join(json.dumps(line) + "\n" for line in lines))
+    _damage_three_runs(out, truncate_chunk=True)  # without hashes, a chunk must fail to load to be noticed
+    again = run_campaign(_stored_runs_campaign(out))
+    assert sorted(again.redone) == [1, 2, 3] and again.ran == 3
+    assert again.redone[1].startswith("metrics.json does not load (JSONDecodeError")
+    assert again.redone[2].startswith("timeseries/uav_truth/part-00000.npy does not load (ValueError: ")
+    assert again.redone[3] == "its run directory run-00003 is missing"
+
+
+@pytest.mark.parametrize("bad, why", [
+    (b'{"index": 1, "seed": 5, "sta', "its last line was cut off (28 bytes, no newline)"),
+    (b"\x00\x17garbage\n", "unreadable run record (JSONDecodeError: Expecting value: line 1 column 1 (char 0))"),
+    (b'{"index": 99, "seed": 1, "status": "completed", "error": null, "wall_time_s": 0}\n',
+     "unreadable run record (ValueError: run index 99 outside 0..3)"),
+    (b'{"index": "1", "seed": 1, "status": "completed", "error": null, "wall_time_s": 0}\n',
+     "unreadable run record (ValueError: RunReport.index must be int, got '1')"),
+], ids=["torn-last-line", "garbage", "index-outside", "index-not-int"])
+def test_unreadable_journal_lines_are_dropped_and_their_runs_redone(tmp_path, caplog, bad, why):
+    out = tmp_path / "c"
+    run_campaign(_stored_runs_campaign(out))
+    journal = out / "campaign.jsonl"
+    lines = journal.read_bytes().splitlines(keepends=True)
+    kept = [line for line in lines if json.loads(line)["index"] != 1]
+    journal.write_bytes(b"".join(kept[:2]) + (bad if bad.endswith(b"\n") else b"") + b"".join(kept[2:])
+                        + (b"" if bad.endswith(b"\n") else bad))
+    with caplog.at_level("WARNING", logger="simulator.campaign.journal"):
+        again = run_campaign(_stored_runs_campaign(out))
+    assert again.ran == 1 and sorted(r.index for r in again.reports) == [0, 1, 2, 3]
+    assert "dropped, its run runs again" in caplog.text and why in caplog.text
+    assert (out / "campaign.rejected.jsonl").read_bytes() == (bad if bad.endswith(b"\n") else bad + b"\n")
+    assert sorted(r["index"] for r in _journal(out)) == [0, 1, 2, 3]  # the journal is whole again
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="simulator.campaign.journal"):
+        assert run_campaign(_stored_runs_campaign(out)).ran == 0
+    assert not caplog.text  # warned once: the bad line is no longer in the journal
+
+
+@pytest.mark.slow
+def test_the_command_redoes_damaged_runs_of_the_demo_world_and_says_so(tmp_path, capsys):
+    out = tmp_path / "c"
+    args = ["campaign", "demo", "--runs", "4", "--duration", "1", "--workers", "2", "--seed", "3", "--quiet",
+            "--out", str(out)]
+    assert main(args) == 0
+    capsys.readouterr()
+    _damage_three_runs(out)
+    assert main(args) == 0
+    io = capsys.readouterr()
+    assert f"campaign {out}: 4 of 4 runs recorded (3 run now, 3 of them redone: their stored files were damaged)" \
+        in io.out
+    assert "run 1 redone: metrics.json has 10 bytes" in io.err
+    assert "run 2 redone: timeseries/uav_truth/part-00000.npy differs from the file the run wrote" in io.err
+    assert "run 3 redone: its run directory run-00003 is missing" in io.err
+    assert json.loads((out / "runs" / "run-00001" / "metrics.json").read_text())["complete"] is True

@@ -61,8 +61,11 @@ def _export(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 2
     out = Path(args.out) if args.out else run_dir / f"run{suffix}"
+    from simulator.stdio import stdout_to_fd
+
     try:
-        path = export_run(run_dir, fmt, out)
+        with stdout_to_fd(2):  # PyBullet's C code prints on import (the replay's geometry reader): stdout stays ours
+            path = export_run(run_dir, fmt, out)
     except Exception as exc:  # noqa: BLE001 - the run record is untouched; the failure is reported
         print(f"skytrack export: writing {out} failed: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1

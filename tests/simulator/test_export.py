@@ -152,3 +152,37 @@ def test_covariance_ellipse_spans_two_sigma_along_the_principal_axes():
     P = np.array([[2.0, 1.0], [1.0, 2.0]])  # eigenvalues 3 (along (1, 1)) and 1
     r = np.linalg.norm(covariance_ellipse(np.zeros(2), P), axis=1)
     assert np.isclose(r.max(), 2 * np.sqrt(3.0)) and np.isclose(r.min(), 2.0, atol=0.02)
+
+
+def _conforms(value, schema, where="") -> list[str]:
+    """What in ``value`` breaks the JSON schema ``schema`` (the subset the export's schemas use)."""
+    if "oneOf" in schema:
+        return [] if value in [o["const"] for o in schema["oneOf"]] else [f"{where}: {value!r} not one of"]
+    kinds = schema.get("type")
+    kinds = kinds if isinstance(kinds, list) else [kinds]
+    ok = {"object": isinstance(value, dict), "array": isinstance(value, list), "string": isinstance(value, str),
+          "boolean": isinstance(value, bool), "null": value is None,
+          "integer": isinstance(value, int) and not isinstance(value, bool),
+          "number": isinstance(value, int | float) and not isinstance(value, bool)}
+    if not any(ok[k] for k in kinds):
+        return [f"{where}: {value!r} is not {kinds}"]
+    if isinstance(value, dict):
+        props = schema["properties"]
+        bad = [f"{where}.{k}: unknown field" for k in value if k not in props]
+        bad += [f"{where}.{k}: missing" for k in schema.get("required", ()) if k not in value]
+        return bad + [e for k, v in value.items() if k in props for e in _conforms(v, props[k], f"{where}.{k}")]
+    if isinstance(value, list):
+        return [e for i, v in enumerate(value) for e in _conforms(v, schema["items"], f"{where}[{i}]")]
+    return []
+
+
+def test_mcap_messages_conform_to_their_channels_schemas(demo_run, tmp_path):
+    out = tmp_path / "demo.mcap"
+    assert main(["export", str(demo_run.out_dir), "--format", "mcap", "--out", str(out)]) == 0
+    seen, problems = Counter(), []
+    with open(out, "rb") as f:
+        for schema, channel, message in mcap_reader.make_reader(f).iter_messages():
+            seen[schema.name] += 1
+            problems += _conforms(json.loads(message.data), json.loads(schema.data), channel.topic)
+    assert problems == []
+    assert set(seen) == {"foxglove.SceneUpdate", "foxglove.FrameTransform", "skytrack.Series"}

@@ -3,10 +3,11 @@ with covariance ellipses, radio links and scalar series, all on the run's simula
 
 Everything is read with the readers a replay uses: :func:`simulator.runrecord.load_run` for the streams,
 :func:`simulator.render.stage.load_geometry` for ``geometry.npz`` (buildings and road centre-lines),
-:func:`simulator.render.world_view.read_world` for names, roles and body sizes, and
-:class:`simulator.render.world_marks.RadioLinks` for the links' delivery probabilities (the run's own channel model on
-its recorded buildings). A building whose footprint is not a rectangle becomes its minimum rotated bounding box, so
-every building is one box. Times and values are the record's own: nothing is resampled.
+:func:`simulator.render.world_view.read_world` for names, roles and body sizes, and the run's own channel model on
+its recorded buildings for the links' delivery probabilities (:mod:`simulator.export.links`, the numbers
+:class:`simulator.render.world_marks.RadioLinks` draws in a replay). A building whose footprint is not a rectangle
+becomes its minimum rotated bounding box, so every building is one box. Times and values are the record's own:
+nothing is resampled.
 """
 
 from __future__ import annotations
@@ -266,23 +267,17 @@ def _tracks(rec: RunRecord, uav_names: dict[int, str]) -> dict[str, list[TrackSt
 
 
 def _links(world: object, geometry: object, bodies: list[Body]) -> list[LinkSample]:
-    from simulator.render.world_marks import RadioLinks
+    from simulator.export.links import link_samples
 
     uavs = [b for b in bodies if b.kind == "uav"]
+    if len(uavs) < 2 or len({len(b.t) for b in uavs}) != 1:
+        return []
     try:
-        links = RadioLinks(world.world, geometry.buildings)
+        samples = link_samples(world.world, geometry.buildings, [b.name for b in uavs], uavs[0].t,
+                               np.stack([b.p_W for b in uavs], axis=1))
     except Exception:  # noqa: BLE001 - links are an addition: an export must not fail for them (as in a replay)
         return []
-    if not links.active or [b.name for b in uavs] != links.names:
-        return []
-    out = []
-    for k, t in enumerate(uavs[0].t):
-        pos = [b.p_W[min(k, len(b.p_W) - 1)] for b in uavs]
-        pairs = links.at(float(t), pos)
-        names = [(a.name, b.name) for i, a in enumerate(uavs) for b in uavs[i + 1:]]
-        out.append(LinkSample(float(t), [(na, nb, pa, pb, pr) for (na, nb), (pa, pb, pr)
-                                         in zip(names, pairs, strict=True)]))
-    return out
+    return [LinkSample(t, links) for t, links in samples]
 
 
 def _series(rec: RunRecord, world: object, uav_names: dict[int, str]) -> list[Series]:

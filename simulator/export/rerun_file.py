@@ -3,7 +3,7 @@
 Entity paths (ENU, z up, metres)::
 
     world/buildings                      static boxes
-    world/roads/<road id>                static centre-lines
+    world/roads                          static centre-lines, labelled with their road ids
     world/uavs/<id>, world/vehicles/<id> a transform per recorded sample; a static box of the body's size under it
     world/detections/<sensor>            one row per scan: radar / box points, bearing / camera rays
     world/tracks/<uav id>                one row per agent step: each track's 2-sigma ellipse, labelled with its id
@@ -59,10 +59,12 @@ def write_rrd(scene: RunScene, out: Path) -> Path:
         rec.log("world/buildings", rr.Boxes3D(
             centers=[b.center for b in scene.buildings], half_sizes=[b.size / 2 for b in scene.buildings],
             rotation_axis_angles=[rr.RotationAxisAngle(axis=[0, 0, 1], radians=b.yaw) for b in scene.buildings],
-            colors=_rgb(_BUILDING_RGB), labels=[b.name for b in scene.buildings], fill_mode="solid"), static=True)
-    for rid, line in scene.roads:
-        rec.log(f"world/roads/{rid}", rr.LineStrips3D([np.c_[line[:, :2], np.full(len(line), 0.05)]],
-                                                      colors=_rgb(_ROAD_RGB), radii=0.5), static=True)
+            colors=_rgb(_BUILDING_RGB), labels=[b.name for b in scene.buildings], show_labels=False,
+            fill_mode="solid"), static=True)
+    if scene.roads:  # one entity: a city's thousands of roads as entities of their own slow a viewer down
+        strips = [np.c_[line[:, :2], np.full(len(line), 0.05)] for _r, line in scene.roads]
+        rec.log("world/roads", rr.LineStrips3D(strips, labels=[rid for rid, _l in scene.roads], colors=_rgb(_ROAD_RGB),
+                                               radii=0.5, show_labels=False), static=True)
     uav_index = {b.name: k for k, b in enumerate(b for b in scene.bodies if b.kind == "uav")}
     for body in scene.bodies:
         _log_body(rr, rec, body, uav_index)

@@ -51,10 +51,13 @@ def test_rerun_export_has_the_runs_entities_rows_and_clock(demo_run, tmp_path, c
     out = tmp_path / "demo.rrd"
     assert main(["export", str(demo_run.out_dir), "--format", "rerun", "--out", str(out)]) == 0
     assert capsys.readouterr().out == f"rerun: {out}\n"
-    rows, static, timelines, uav_times = Counter(), set(), set(), []
+    rows, static, timelines, uav_times, labels = Counter(), set(), set(), [], {}
     for c in rerun_chunk.RrdReader(out).stream().to_chunks():
         if c.is_static:
             static.add(c.entity_path)
+            batch = c.to_record_batch()
+            for n in (n for n in batch.schema.names if n.endswith(":labels")):
+                labels[c.entity_path] = batch.column(n).to_pylist()[0]
             continue
         rows[c.entity_path] += c.num_rows
         timelines.update(c.timeline_names)
@@ -71,8 +74,9 @@ def test_rerun_export_has_the_runs_entities_rows_and_clock(demo_run, tmp_path, c
     assert rows["/series/uav1/target_track/p_target"] == expected["/world/tracks/uav1"]
     assert "/series/uav1/commands/vx" not in rows  # a unicycle UAV never sets it: no empty series
     with np.load(demo_run.out_dir / "geometry.npz") as g:
-        roads = {f"/world/roads/{r}" for r in g["road_ids"]}
-    assert {"/world", "/world/buildings", "/world/uavs/uav1/body", "/world/vehicles/car1/body"} | roads <= static
+        assert labels["/world/roads"] == [str(r) for r in g["road_ids"]]
+        assert labels["/world/buildings"] == [f"building{k}" for k in range(len(g["building_height"]))]
+    assert {"/world", "/world/uavs/uav1/body", "/world/vehicles/car1/body"} <= static
     assert "sim_time" in timelines
 
 

@@ -93,15 +93,36 @@ def _print_summary(metrics: dict, out: Path) -> None:
 
 
 def _worlds(args: argparse.Namespace) -> int:
+    """Each shipped world's name and its ``description`` (else its header comment's first paragraph), whole, wrapped
+    to the terminal's width beside the names."""
+    import shutil
+    import textwrap
+
+    import yaml
+
     from worlds.loader import shipped_worlds
 
-    for name, path in shipped_worlds().items():
-        first = ""
-        for line in path.read_text(encoding="utf-8").splitlines():
-            if line.startswith("#"):
-                first = line.lstrip("# ").strip()
-                break
-        print(f"{name:<20} {first}")
+    worlds = shipped_worlds()
+    col = max((len(n) for n in worlds), default=0) + 2
+    width = max(col + 30, min(shutil.get_terminal_size((100, 24)).columns, 120))
+    for name, path in worlds.items():
+        text = path.read_text(encoding="utf-8")
+        try:
+            raw = yaml.safe_load(text)
+        except yaml.YAMLError:
+            raw = None
+        desc = str(raw.get("description") or "") if isinstance(raw, dict) else ""
+        if not desc:  # the header comment's first paragraph
+            head = []
+            for line in text.splitlines():
+                if not line.startswith("#") or (head and not line.lstrip("# ").strip()):
+                    break
+                head.append(line.lstrip("# ").strip())
+            desc = " ".join(h for h in head if h)
+        lines = textwrap.wrap(desc, width=width - col, break_long_words=False, break_on_hyphens=False) or [""]
+        print(f"{name:<{col}}{lines[0]}".rstrip())
+        for line in lines[1:]:
+            print(" " * col + line)
     return 0
 
 
@@ -128,6 +149,9 @@ def _bench(args: argparse.Namespace) -> int:
 
 def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="skytrack", description="Multi-UAV ground-target tracking simulator")
+    from simulator.cli_tools import add_tools_parsers, package_version
+
+    ap.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = ap.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a world headless and write a run directory")
@@ -163,6 +187,12 @@ def _parser() -> argparse.ArgumentParser:
     from simulator.reproduce.cli import add_reproduce_parser
 
     add_reproduce_parser(sub)
+
+    from simulator.export.cli import add_export_parser
+
+    add_export_parser(sub)
+
+    add_tools_parsers(sub)
     return ap
 
 

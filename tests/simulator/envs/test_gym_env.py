@@ -161,3 +161,16 @@ def test_resets_and_close_leave_no_pybullet_client():
     env.close()
     env.close()
     assert connected_clients() == before
+
+
+def test_road_standoff_default_learner_steps_at_two_hertz_beside_the_nmpc_uav():
+    env = gymnasium.make("skytrack/Tracking-v0", world="road_standoff", duration=1.5)
+    obs, info = env.reset(seed=2)
+    assert (info["t"], info["uav"]) == (0.5, "uav1")  # the world's 2 Hz autonomy: first step at 0.5 s
+    agents = env.unwrapped.core.episode.assembly.agents
+    assert [type(a.agent.guidance).__name__ for a in agents] == ["HeldSetpoint", "NmpcStandoffGuidance"]
+    ends = [env.step(np.array([12.0, 0.0, 60.0], np.float32))[2:4] for _ in range(2)]
+    env.close()
+    assert ends == [(False, False), (False, True)]
+    with pytest.raises(ValueError, match=r"UAV uav1 searches with set fusion, whose guidance is the team's decision"):
+        make(world="search_decoys").reset(seed=1)

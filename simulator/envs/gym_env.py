@@ -14,6 +14,7 @@ episode's duration.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -56,7 +57,7 @@ class TrackingEnv(gym.Env):
         config = EnvConfig(world=world, **settings)
         loaded = config.world if isinstance(config.world, LoadedWorld) else load_world(config.world, config.overrides)
         first = [u.id for u in loaded.world.uavs][:1]
-        self.core = TrackingCore(EnvConfig(**{**config.__dict__, "world": loaded}),
+        self.core = TrackingCore(replace(config, world=loaded),
                                  [config.uav] if config.uav is not None else first,
                                  reward=None if isinstance(reward, RewardConfig) else reward)
         self.uav = learner = self.core.learners[0]

@@ -1,12 +1,13 @@
 """Reading world files and ``--set`` values under limits, so that no input makes the loader hang, exhaust memory or
 fail with anything but :class:`worlds.errors.WorldError`.
 
-A world file is UTF-8 text of at most :data:`MAX_WORLD_BYTES`. Its YAML is read with PyYAML's safe loader (no tags
-that build Python objects) while the node graph is composed, each node is measured as if its aliases were copied out
-— the form the loader works on (:func:`unshared`) — and the file is refused as soon as a node lies deeper than
-:data:`MAX_DEPTH` or holds more than :data:`MAX_NODES` values, before anything is built from it. A 400-byte "billion
-laughs" file (aliases of aliases of lists) is a few thousand composed nodes but billions of values once expanded; it is
-refused at its first oversized node. A recursive alias (``&a [*a]``) is refused too.
+A world file is UTF-8 text of at most :data:`MAX_WORLD_BYTES`. Its YAML is read with PyYAML's safe loader, without
+tags (``!!python/...`` builds Python objects in unsafe loaders; ``!!timestamp x`` breaks PyYAML's own constructors).
+While the node graph is composed the values are counted as if every alias were copied out — the form the loader works
+on (:func:`unshared`) — and reading stops at the first value past :data:`MAX_NODES` or the first mapping or list
+deeper than :data:`MAX_DEPTH`, before anything is built from the file. A 400-byte "billion laughs" file (aliases of
+aliases of lists) is a few hundred composed nodes but hundreds of millions of values once expanded; it is refused at
+its fifth line. A recursive alias (``&a [*a]``) is refused too.
 """
 
 from __future__ import annotations
@@ -89,7 +90,11 @@ class _LimitedLoader(yaml.SafeLoader):
         self._sizes: dict[int, tuple[int, int]] = {}  # id(node) -> (values, depth) of a composed node
 
     def compose_node(self, parent: Any, index: Any) -> Any:
-        line = self.peek_event().start_mark.line + 1
+        event = self.peek_event()
+        line = event.start_mark.line + 1
+        if getattr(event, "tag", None) is not None:
+            raise YamlInputError(f"no YAML tags (this value is tagged {event.tag!r}): world files hold plain "
+                                 "mappings, lists, strings, numbers and booleans", line)
         alias = self.check_event(yaml.AliasEvent)
         self._level += 1
         try:
@@ -143,13 +148,18 @@ def parse_yaml(text: str) -> tuple[Any, yaml.Node | None]:
     Raises
     ------
     YamlInputError
-        For invalid YAML, a tag the safe loader does not build (``!!python/...``), a number it cannot read, or input
+        For invalid YAML, a tagged value (``!!python/...``, ``!!timestamp ...``), a number it cannot read, or input
         beyond :data:`MAX_DEPTH` / :data:`MAX_NODES`.
     """
-    loader = _LimitedLoader(text)
+    loader = None
     try:
+        loader = _LimitedLoader(text)  # the reader refuses control characters here
         node = loader.get_single_node()
         data = loader.construct_document(node) if node is not None else None
+    except yaml.reader.ReaderError as exc:
+        line = text.count("\n", 0, exc.position) + 1
+        raise YamlInputError(f"valid YAML (character #x{exc.character:04x} on line {line} is a control character, "
+                             "which YAML does not allow)", line) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         problem = getattr(exc, "problem", None) or str(exc)
@@ -159,7 +169,8 @@ def parse_yaml(text: str) -> tuple[Any, yaml.Node | None]:
             raise
         raise YamlInputError(f"valid YAML values ({exc})") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     return data, node
 
 

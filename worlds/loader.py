@@ -5,7 +5,9 @@ path.
 Every problem — missing file, bad YAML, unknown key, wrong type, a number that is not finite or out of its physical
 range, a rate that does not divide the physics rate (the car driver's own rate included), a route naming no road —
 raises :class:`worlds.errors.WorldError` naming the file, the key path, the bad value and what was expected, before
-anything is built.
+anything is built. So does hostile input: a file that is not UTF-8 text or larger than 1 MB, YAML nested too deep or
+exploding through aliases, tags, a ``--set`` value that is not YAML (:mod:`worlds.yaml_input` bounds what is read,
+so a load takes about a second at most).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from worlds.errors import WorldError, WorldIssue, format_path
 from worlds.schema import World
 from worlds.yaml_input import MAX_DEPTH, YamlInputError, check_shape, parse_yaml, read_world_text, unshared
 
-__all__ = ["LoadedWorld", "load_world", "parse_override", "shipped_worlds", "world_path"]
+__all__ = ["LoadedWorld", "OverrideError", "load_world", "parse_override", "shipped_worlds", "world_path"]
 
 _PATH_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 

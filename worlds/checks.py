@@ -6,6 +6,7 @@ Every rate is judged by :func:`worlds.rates.rate_divisor`, the rule the clock an
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Callable
 
@@ -18,6 +19,10 @@ __all__ = ["check_world", "register_component_check"]
 
 MAX_START_ALTITUDE = 5000.0
 """m: highest start of a UAV; the airframes' rotor and drag data are sea-level figures."""
+
+START_CLEARANCE = 0.5
+"""m: the least room between a UAV's start and a building (the survey_quad's collision box reaches 0.33 m from its
+centre, the crazyflie's less); closer, the body would start inside the building's collision shape."""
 
 TRACKER_TARGET_HEIGHT = 0.0
 """m: the tracker's default ``target_height`` (``autonomy.estimation.tracker.TrackerConfig``; not imported here, where
@@ -148,7 +153,33 @@ def _start_issues(world: World) -> list[WorldIssue]:
         if not 0.0 < z <= MAX_START_ALTITUDE:
             issues.append(WorldIssue(f"uavs[{i}].initial.position", list(uav.initial.position),
                                      f"a start above the ground: 0 < z <= {MAX_START_ALTITUDE:g} m"))
+            continue
+        k = _building_at(world, uav.initial.position)
+        if k is not None:
+            b = world.buildings[k]
+            issues.append(WorldIssue(f"uavs[{i}].initial.position", list(uav.initial.position),
+                                     f"a start outside every building, at least {START_CLEARANCE:g} m from its walls "
+                                     f"and roof: buildings[{k}] (center {list(b.center)}, size {list(b.size)}, "
+                                     f"yaw_deg {b.yaw_deg:g}) holds it"))
     return issues
+
+
+def _building_at(world: World, position: tuple[float, float, float]) -> int | None:
+    """Index of the first of ``world.buildings`` (cuboids) whose shape grown by :data:`START_CLEARANCE` holds
+    ``position``, or None. The buildings of a ``town`` or an ``osm`` map are generated when the world is built and
+    are not checked here."""
+    x, y, z = position
+    for k, b in enumerate(world.buildings):
+        length, width, height = b.size
+        if z > height + START_CLEARANCE:
+            continue
+        yaw = math.radians(b.yaw_deg)
+        dx, dy = x - b.center[0], y - b.center[1]
+        along = dx * math.cos(yaw) + dy * math.sin(yaw)  # in the building's frame (length along yaw)
+        across = -dx * math.sin(yaw) + dy * math.cos(yaw)
+        if abs(along) <= length / 2 + START_CLEARANCE and abs(across) <= width / 2 + START_CLEARANCE:
+            return k
+    return None
 
 
 def _road_issues(world: World) -> list[WorldIssue]:

@@ -50,12 +50,19 @@ def _short(value: object, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+MAX_SHOWN = 50
+"""Most issues ``str(WorldError)`` lists, one per line; the rest are counted (``issues`` holds them all)."""
+
+
 class WorldError(ValueError):
-    """A world file that cannot be used; ``str()`` lists every issue, one per line."""
+    """A world file that cannot be used; ``str()`` lists every issue, one per line (the first :data:`MAX_SHOWN`)."""
 
     def __init__(self, file: str, issues: list[WorldIssue]) -> None:
         self.file = file
         self.issues = list(issues)
-        lines = [f"invalid world {file} ({len(self.issues)} problem{'s' if len(self.issues) != 1 else ''}):"]
-        lines += ["  " + issue.render(file) for issue in self.issues]
+        n = len(self.issues)
+        lines = [f"invalid world {file} ({n} problem{'s' if n != 1 else ''}):"]
+        lines += ["  " + issue.render(file) for issue in self.issues[:MAX_SHOWN]]
+        if n > MAX_SHOWN:
+            lines.append(f"  ... and {n - MAX_SHOWN} more problems")
         super().__init__("\n".join(lines))

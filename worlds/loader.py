@@ -5,7 +5,9 @@ path.
 Every problem — missing file, bad YAML, unknown key, wrong type, a number that is not finite or out of its physical
 range, a rate that does not divide the physics rate (the car driver's own rate included), a route naming no road —
 raises :class:`worlds.errors.WorldError` naming the file, the key path, the bad value and what was expected, before
-anything is built.
+anything is built. So does hostile input: a file that is not UTF-8 text or larger than 1 MB, YAML nested too deep or
+exploding through aliases, tags, a ``--set`` value that is not YAML (:mod:`worlds.yaml_input` bounds what is read,
+so a load takes about a second at most).
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ from pydantic import ValidationError
 from worlds.checks import check_world
 from worlds.errors import WorldError, WorldIssue, format_path
 from worlds.schema import World
+from worlds.yaml_input import MAX_DEPTH, YamlInputError, check_shape, parse_yaml, read_world_text, unshared
 
-__all__ = ["LoadedWorld", "load_world", "parse_override", "shipped_worlds", "world_path"]
+__all__ = ["LoadedWorld", "OverrideError", "load_world", "parse_override", "shipped_worlds", "world_path"]
 
 _PATH_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 
@@ -79,13 +82,42 @@ def parse_key_path(key: str) -> list[str | int]:
     return parts
 
 
+class OverrideError(ValueError):
+    """A ``--set`` line that cannot be applied; ``expected`` says what would have been accepted."""
+
+    def __init__(self, expected: str) -> None:
+        super().__init__(expected)
+        self.expected = expected
+
+
 def parse_override(text: str) -> tuple[list[str | int], Any]:
     """``"sim.duration_s=30"`` -> (["sim", "duration_s"], 30). The value is read as YAML (``[1, 2, 3]``, ``true``,
-    ``null``)."""
+    ``null``) under the limits of the world files' YAML (:func:`worlds.yaml_input.parse_yaml`).
+
+    Raises
+    ------
+    OverrideError
+        (a ``ValueError``) when the line is no ``key.path=value``, the key path is malformed or deeper than
+        :data:`worlds.yaml_input.MAX_DEPTH`, or the value is not valid YAML (a tag such as ``!!python/...``
+        included).
+    """
     if "=" not in text:
-        raise ValueError(f"override {text!r} must look like key.path=value")
+        raise OverrideError(f"key.path=value naming an existing place (override {text!r} must look like "
+                            "key.path=value)")
     key, value = text.split("=", 1)
-    return parse_key_path(key.strip()), yaml.safe_load(value) if value.strip() else ""
+    try:
+        keys = parse_key_path(key.strip())
+    except ValueError as exc:
+        raise OverrideError(f"key.path=value naming an existing place ({exc})") from None
+    if len(keys) > MAX_DEPTH:
+        raise OverrideError(f"a key path of at most {MAX_DEPTH} parts (this one has {len(keys)})")
+    if not value.strip():
+        return keys, ""
+    try:
+        data, _ = parse_yaml(value)
+    except YamlInputError as exc:
+        raise OverrideError(f"a YAML value after '=': {exc.problem}") from None
+    return keys, data
 
 
 def _apply_override(raw: dict[str, Any], keys: list[str | int], value: Any) -> None:
@@ -116,29 +148,16 @@ def _apply_override(raw: dict[str, Any], keys: list[str | int], value: Any) -> N
         node[last] = value
 
 
-def _unshared(node: Any) -> Any:
-    """A copy of parsed YAML in which no mapping or list is shared: each alias becomes a copy of its anchor's node
-    (``copy.deepcopy`` would keep the sharing)."""
-    if isinstance(node, dict):
-        return {k: _unshared(v) for k, v in node.items()}
-    if isinstance(node, list):
-        return [_unshared(v) for v in node]
-    return node
-
-
-def _line_index(text: str) -> dict[tuple, int]:
-    """Map key paths to 1-based line numbers by walking YAML's node tree (best effort)."""
+def _line_index(root: yaml.Node | None) -> dict[tuple, int]:
+    """Map key paths to 1-based line numbers by walking YAML's node tree (best effort; the tree is bounded by
+    :func:`worlds.yaml_input.parse_yaml`'s limits, aliases expanded)."""
     lines: dict[tuple, int] = {}
-    try:
-        root = yaml.compose(text)
-    except yaml.YAMLError:
-        return lines
 
     def walk(node: Any, loc: tuple) -> None:
         lines.setdefault(loc, node.start_mark.line + 1)
         if isinstance(node, yaml.MappingNode):
             for k, v in node.value:
-                key = k.value
+                key = k.value if isinstance(k, yaml.ScalarNode) else repr(k.value)
                 lines[loc + (key,)] = k.start_mark.line + 1
                 walk(v, loc + (key,))
         elif isinstance(node, yaml.SequenceNode):
@@ -148,6 +167,15 @@ def _line_index(text: str) -> dict[tuple, int]:
     if root is not None:
         walk(root, ())
     return lines
+
+
+def _first_line(text: str, line: int | None) -> str:
+    """The text of 1-based ``line`` (what the YAML problem is about), or the file's first line."""
+    rows = text.splitlines()
+    if not rows:
+        return ""
+    row = rows[line - 1] if line is not None and 1 <= line <= len(rows) else rows[0]
+    return row.strip()
 
 
 def _lookup_line(lines: dict[tuple, int], loc: tuple) -> int | None:
@@ -231,27 +259,38 @@ def load_world(source: str | Path, overrides: list[str] | tuple[str, ...] = ()) 
         known = ", ".join(shipped_worlds()) or "none"
         raise WorldError(file, [WorldIssue("<file>", str(source),
                                            f"an existing world file or a shipped world name ({known})")])
-    text = path.read_text(encoding="utf-8")
     try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else None
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise WorldError(file, [WorldIssue("<yaml>", problem, "valid YAML", line)]) from None
+        text = read_world_text(path)
+    except OSError as exc:
+        raise WorldError(file, [WorldIssue("<file>", str(source), f"a readable world file ({exc})")]) from None
+    except YamlInputError as exc:
+        raise WorldError(file, [WorldIssue("<file>", str(source), exc.problem, exc.line)]) from None
+    try:
+        raw, root = parse_yaml(text)
+    except YamlInputError as exc:
+        raise WorldError(file, [WorldIssue("<yaml>", _first_line(text, exc.line), exc.problem, exc.line)]) from None
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
         raise WorldError(file, [WorldIssue("<top level>", raw, "a mapping of sections (sim, uavs, ...)", 1)])
-    raw = _unshared(raw)  # YAML aliases (&a ... *a) load as one shared object: an override must change one place
-    lines = _line_index(text)
+    raw = unshared(raw)  # YAML aliases (&a ... *a) load as one shared object: an override must change one place
+    lines = _line_index(root)
     issues: list[WorldIssue] = []
     for ov in overrides:
         try:
             keys, value = parse_override(ov)
+        except OverrideError as exc:
+            issues.append(WorldIssue(f"--set {ov}", ov, exc.expected))
+            continue
+        try:
             _apply_override(raw, keys, value)
         except (ValueError, KeyError) as exc:
             issues.append(WorldIssue(f"--set {ov}", ov, f"key.path=value naming an existing place ({exc})"))
+    if not issues and overrides:
+        try:
+            check_shape(raw)
+        except YamlInputError as exc:
+            issues.append(WorldIssue("--set", list(overrides), exc.problem))
     if issues:
         raise WorldError(file, issues)
     try:

@@ -47,9 +47,15 @@ def rate_divisor(rate_hz: float, physics_hz: int) -> int | None:
 
 
 def divisors_text(physics_hz: int, count: int = 12) -> str:
-    """The largest rates (Hz) that divide ``physics_hz``, as text for an error message: ``"240, 120, 80, ..."``."""
-    rates = [physics_hz // d for d in range(1, physics_hz + 1) if physics_hz % d == 0]
-    return ", ".join(f"{r:g}" for r in rates[:count])
+    """The largest rates (Hz) that divide ``physics_hz``, as text for an error message: ``"240, 120, 80, ..."``.
+
+    The divisors come in pairs ``(d, physics_hz // d)`` with ``d <= sqrt(physics_hz)``, so the work grows with the
+    square root of ``physics_hz`` (a prime near 1e9 takes milliseconds, not a loop to 1e9)."""
+    if physics_hz < 1:
+        return ""
+    small = [d for d in range(1, math.isqrt(physics_hz) + 1) if physics_hz % d == 0]
+    rates = sorted({physics_hz // d for d in small} | set(small), reverse=True)
+    return ", ".join(str(r) for r in rates[:count])
 
 
 def divisor(rate_hz: float, physics_hz: int, what: str = "rate_hz") -> int:

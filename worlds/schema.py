@@ -10,6 +10,7 @@ the physics rate, references between sections, UAVs starting inside the terrain)
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, ClassVar, Literal
 
 from pydantic import ConfigDict, Field, field_validator, model_validator
@@ -83,12 +84,21 @@ MAX_PHYSICS_HZ = 2400
 """Hz: ten times the default 240 Hz; finer steps change no flight and only multiply the run time."""
 
 
+MAX_DURATION_S = 86_400.0
+"""s: the longest simulated run, one day (20.7 million ticks at 240 Hz); the airframes' batteries last well under an
+hour."""
+
+MAX_SEED = 2**63 - 1
+"""The largest run seed: it fits the signed 64-bit integers of JSON readers and numpy."""
+
+
 class SimSection(Strict):
     physics_hz: int = Field(240, ge=MIN_PHYSICS_HZ, le=MAX_PHYSICS_HZ,
                             description=f"physics step rate, Hz, in [{MIN_PHYSICS_HZ}, {MAX_PHYSICS_HZ}] (the inner "
                                         "loops and rotor lags step once per tick); every other rate must divide it")
-    duration_s: PositiveFloat = Field(60.0, description="simulated duration, s")
-    seed: int = Field(0, ge=0, description="root of the run's SeedSequence")
+    duration_s: float = Field(60.0, gt=0, le=MAX_DURATION_S,
+                              description=f"simulated duration, s, in (0, {MAX_DURATION_S:g}] (one day)")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="root of the run's SeedSequence, in [0, 2^63 - 1]")
     record_hz: int = Field(20, gt=0, description="rate at which truth / estimates / commands are recorded, Hz")
     flush_every_s: PositiveFloat = Field(2.0, description="simulated seconds between flushes of the run record to "
                                                           "disk; at least one physics tick (the record is flushed "
@@ -615,10 +625,17 @@ class TargetSpec(Strict):
     cue: CueSpec = Field(default_factory=CueSpec, description="the team's hand-off of where the target starts")
 
 
+WORLD_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}")
+"""A world's name: ASCII letters, digits, ``_``, ``-`` and ``.`` (not first), at most 100 characters. It names the
+default run directory ``runs/<name>``, so it must be one plain path component: no separators, no ``..``, not
+absolute, not hidden."""
+
+
 class World(Strict):
     """A whole world file."""
 
-    name: str = "unnamed"
+    name: str = Field("unnamed", description="the world's name, also the default run directory runs/<name>: "
+                                             "letters, digits, '_', '-' and '.' (not first), at most 100 characters")
     description: str = ""
     sim: SimSection = Field(default_factory=SimSection)
     environment: EnvironmentSection = Field(default_factory=EnvironmentSection)
@@ -633,6 +650,14 @@ class World(Strict):
     uavs: list[UavSpec] = Field(default_factory=list)
     comms: CommsSection = Field(default_factory=CommsSection)
     render: RenderSection = Field(default_factory=RenderSection)
+
+    @field_validator("name")
+    @classmethod
+    def _plain_name(cls, value: str) -> str:
+        if not WORLD_NAME.fullmatch(value):
+            raise ValueError("a plain name: ASCII letters, digits, '_', '-' and '.' (not first), at most 100 "
+                             "characters (it names the run directory runs/<name>: no '/', no '..')")
+        return value
 
     @field_validator("targets", mode="before")
     @classmethod

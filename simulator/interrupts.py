@@ -64,13 +64,16 @@ class DeferredInterrupts:
 
     def _note(self, signum: int, frame: FrameType | None) -> None:
         if self.pending is not None:  # a second signal: the first one has not reached a safe point yet
+            self.pending = None
             raise KeyboardInterrupt(f"signal {signal.Signals(signum).name} (twice)")
         self.pending = signum
 
     def check(self) -> None:
-        """Raise ``KeyboardInterrupt`` if a signal arrived since the last check."""
-        if self.pending is not None:
-            raise KeyboardInterrupt(f"signal {signal.Signals(self.pending).name}")
+        """Raise ``KeyboardInterrupt`` if a signal arrived since the last check (once: it is then no longer
+        pending)."""
+        signum, self.pending = self.pending, None
+        if signum is not None:
+            raise KeyboardInterrupt(f"signal {signal.Signals(signum).name}")
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:

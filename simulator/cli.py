@@ -27,7 +27,7 @@ EXIT_DIVERGED = 3
 
 def _check_run_flags(args: argparse.Namespace) -> None:
     """The ``run`` flags' values, checked before anything is loaded or written (exit 2, the flag named)."""
-    from simulator.engine import MAX_DURATION_S
+    from simulator.clock import MAX_DURATION_S
     from simulator.rundir import RunDirError, check_out_dir
 
     d = args.duration

@@ -28,7 +28,7 @@ from typing import Any
 import yaml
 
 from simulator.prepare import build_assembly, prepare
-from simulator.clock import Clock
+from simulator.clock import MAX_DURATION_S, Clock
 from simulator.plots import write_geometry, write_plots
 from simulator.interrupts import DeferredInterrupts, caused_by_interrupt
 from simulator.record import RunRecorder
@@ -40,11 +40,7 @@ from simulator.tick import Assembly
 from simulator.watchdog import Divergence, world_watchdog
 from worlds.loader import LoadedWorld
 
-__all__ = ["MAX_DURATION_S", "RunOptions", "RunOutcome", "run_world"]
-
-MAX_DURATION_S = 1e9
-"""Longest run (s, about 32 years): its tick count stays an exact integer in a float at any physics rate up to
-9 MHz."""
+__all__ = ["RunOptions", "RunOutcome", "run_world"]
 
 
 @dataclass(frozen=True, kw_only=True)

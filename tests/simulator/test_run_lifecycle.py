@@ -8,6 +8,7 @@ import json
 import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pybullet as p
@@ -273,3 +274,28 @@ def test_an_interrupted_video_leaves_no_file_that_looks_complete(tmp_path):
         enc.write(frame)
         assert out.read_bytes() == b"an earlier video"  # the new one is written beside it meanwhile
     assert list(tmp_path.iterdir()) == [out] and out.stat().st_size > 100
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay_s", [0.0, 0.35, 0.8])
+def test_ctrl_c_during_the_nmpc_solves_is_an_interruption(tmp_path, delay_s):
+    """A real SIGINT to a run whose UAVs solve a compiled NMPC at every agent step (most of its wall time): exit 130,
+    status interrupted, whichever instant it lands (unguarded, some landed inside the solve and ended as errors)."""
+    out = tmp_path / "nmpc"
+    proc = subprocess.Popen([sys.executable, "-m", "simulator.cli", "run", "road_standoff", "--duration", "120",
+                             "--out", str(out), "--quiet", "--no-plots", "--set", "sim.flush_every_s=0.5"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not (out / "metrics.json").exists() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        time.sleep(delay_s)
+        proc.send_signal(signal.SIGINT)
+        code = proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    stderr = proc.stderr.read()
+    assert code == 130, stderr
+    rec = load_run(out)
+    assert rec.status == "interrupted" and rec.metrics["status"] == "interrupted"
+    assert "SystemError" not in stderr and not [e for e in rec.events if e["type"] == "exception"]

@@ -204,7 +204,7 @@ def _sigterm_as_interrupt(signum: int, frame: object) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     try:
         return args.fn(args)
     except (WorldError, _BadFlag) as exc:
@@ -213,6 +213,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("skytrack: interrupted", file=sys.stderr)
         return 130
+    finally:  # called in-process (tests, notebooks): SIGTERM as it was
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

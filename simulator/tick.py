@@ -150,7 +150,7 @@ class Assembly:
         """The watchdog on the UAVs' state at every tick, and on the cars' at the ticks that record it (their state
         is computed once per tick that reads it: the record ticks read it anyway)."""
         cars = self.cars.state if self.cars is not None and tick % self.record_div == 0 else None
-        self.watchdog.check(tick, None if self.quads is None else self.quads.state, cars)
+        self.watchdog.check(tick, None if self.quads is None else self.quads.live_state, cars)
 
     def _sense(self, tick: int, t: float) -> None:
         due = [slot for slot in self.sensors if tick % slot.divisor == 0]

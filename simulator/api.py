@@ -29,9 +29,9 @@ class RunResult:
     Attributes
     ----------
     status : str
-        ``completed``, ``interrupted`` or ``error``.
+        ``completed``, ``interrupted``, ``diverged`` (the physics blew up: :mod:`simulator.watchdog`) or ``error``.
     error : str | None
-        The exception, when ``status == "error"``.
+        The exception, when ``status == "error"``; what diverged, when ``status == "diverged"``.
     out_dir : Path
         The run directory.
     metrics : dict
@@ -88,7 +88,8 @@ def run(world: str | Path | LoadedWorld, *, duration: float | None = None, seed:
     overrides : sequence of str
         ``key.path=value`` strings, as ``--set`` on the command line.
     out_dir : path, optional
-        Run directory (default: a new temporary directory).
+        Run directory (default: a new temporary directory). An earlier run there is moved aside to ``<out_dir>.1``
+        (``.2`` ...); a non-empty directory that is not a run's is refused (:mod:`simulator.rundir`).
     estimator, guidance : class or callable, optional
         A user's estimator / guidance law for every UAV: a class (instantiated once per UAV with no arguments) or a
         factory ``f(uav_index, uav_spec)``. An estimator needs ``step(t, detections) -> TargetEstimate | None``; a

@@ -1,12 +1,15 @@
 """The ``skytrack`` command: run worlds, list them, run benchmarks and Monte Carlo campaigns.
 
-Exit codes: 0 success; 1 a run or benchmark failed; 2 bad input (invalid world, bad flag); 130 interrupted (Ctrl-C).
+Exit codes: 0 success; 1 a run or benchmark failed; 2 bad input (invalid world, bad flag, an ``--out`` that cannot
+be used); 3 the run diverged (the divergence watchdog stopped it: a body under the ground, faster than its airframe
+can fly, or with a non-finite state); 130 interrupted (Ctrl-C, SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import signal
 import sys
@@ -16,23 +19,52 @@ from simulator.render.cli import add_video_arguments
 from simulator.stdio import stdout_to_fd
 from worlds.errors import WorldError
 
-__all__ = ["main"]
+__all__ = ["EXIT_DIVERGED", "main"]
+
+EXIT_DIVERGED = 3
+"""Exit code of a run the divergence watchdog stopped (:mod:`simulator.watchdog`)."""
+
+
+def _check_run_flags(args: argparse.Namespace) -> None:
+    """The ``run`` flags' values, checked before anything is loaded or written (exit 2, the flag named)."""
+    from simulator.clock import MAX_DURATION_S
+    from simulator.rundir import RunDirError, check_out_dir
+
+    d = args.duration
+    if d is not None and not (math.isfinite(d) and 0 < d <= MAX_DURATION_S):
+        raise _BadFlag(f"--duration {d:g}: the simulated duration must be a finite number of seconds in "
+                       f"(0, {MAX_DURATION_S:g}]")
+    if args.seed is not None and args.seed < 0:
+        raise _BadFlag(f"--seed {args.seed}: a seed must be an integer >= 0")
+    if args.out is not None:
+        try:
+            check_out_dir(Path(args.out))
+        except RunDirError as exc:
+            raise _BadFlag(f"--out {args.out}: {exc}") from None
 
 
 def _run(args: argparse.Namespace) -> int:
+    _check_run_flags(args)
     import simulator.registry  # noqa: F401  (registers the components' own rules with the loader's checks)
     from worlds.loader import load_world
 
     loaded = load_world(args.world, args.set or [])  # WorldError is reported by main() before PyBullet starts
 
     from simulator.engine import RunOptions, run_world
+    from simulator.rundir import RunDirError
+
     out = Path(args.out) if args.out else Path("runs") / loaded.world.name
     opts = RunOptions(duration_s=args.duration, seed=args.seed, out_dir=out, progress=not args.quiet,
-                      plots=not args.no_plots)
+                      plots=not args.no_plots, notify=lambda text: print(f"skytrack: {text}", flush=True))
     video = _video_config(args, loaded, out)  # flag errors surface before the run, not after it
-    result = run_world(loaded, opts)
+    try:
+        result = run_world(loaded, opts)
+    except RunDirError as exc:  # the default runs/<world> (or a directory changed since the check)
+        raise _BadFlag(f"--out {out}: {exc}") from None
     _print_summary(result.metrics, out)
-    if result.error:
+    if result.status == "diverged":
+        print(f"skytrack: run stopped: {result.error}", file=sys.stderr)
+    elif result.error:
         print(f"skytrack: run failed: {result.error} (traceback in {out / 'events.jsonl'})", file=sys.stderr)
     if result.status == "interrupted":
         return 130
@@ -44,7 +76,7 @@ def _run(args: argparse.Namespace) -> int:
         except Exception as exc:  # noqa: BLE001 - the run record stays valid; the failure is reported
             print(f"skytrack: rendering the video failed: {exc}", file=sys.stderr)
             return 1
-    return 0 if result.status == "completed" else 1
+    return {"completed": 0, "diverged": EXIT_DIVERGED}.get(result.status, 1)
 
 
 def _video_config(args: argparse.Namespace, loaded: object, out: Path) -> object | None:
@@ -202,7 +234,7 @@ def _sigterm_as_interrupt(signum: int, frame: object) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     try:
         return args.fn(args)
     except (WorldError, _BadFlag) as exc:
@@ -211,6 +243,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("skytrack: interrupted", file=sys.stderr)
         return 130
+    finally:  # called in-process (tests, notebooks): SIGTERM as it was
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

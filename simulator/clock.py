@@ -6,7 +6,11 @@ from dataclasses import dataclass
 
 from worlds.rates import divisor
 
-__all__ = ["Clock"]
+__all__ = ["Clock", "MAX_DURATION_S"]
+
+MAX_DURATION_S = 1e9
+"""Longest run (s, about 32 years): its tick count stays an exact integer in a float at any physics rate up to
+9 MHz."""
 
 
 @dataclass(frozen=True, kw_only=True)

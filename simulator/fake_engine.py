@@ -93,6 +93,10 @@ class ScriptedUavs(_Scripted):
                           v_W=self.v_W, omega_B=np.zeros((n, 3)), rotor_speed=np.zeros((n, 4)),
                           thrust=np.zeros((n, 4)))
 
+    @property
+    def live_state(self) -> FleetState:
+        return self.state
+
     def set_command(self, i: int, cmd: FlightSetpoint) -> None:
         self.commands.append((self.tick, i, cmd))
         self.log.append(("uavs.command", self.tick))

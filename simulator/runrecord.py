@@ -11,7 +11,38 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RunRecord", "SetSnapshot", "load_run", "load_search_sets", "load_stream"]
+__all__ = ["RecordError", "RunRecord", "SetSnapshot", "load_run", "load_search_sets", "load_stream"]
+
+
+class RecordError(ValueError):
+    """A file of a run directory that cannot be read (corrupt, truncated, not what its name says); the message
+    names the file."""
+
+
+def _chunk(p: Path) -> dict[str, np.ndarray]:
+    """One chunk's columns; never unpickles (``allow_pickle=False``: a record holds plain arrays only)."""
+    try:
+        if p.suffix == ".npy":
+            a = np.load(p, allow_pickle=False)
+            if a.dtype.names is None:
+                raise ValueError(f"an array of {a.dtype} without named columns")
+            return {k: a[k] for k in a.dtype.names}
+        with np.load(p, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError, KeyError) as exc:  # zipfile.BadZipFile is an OSError
+        raise RecordError(f"{p}: not a readable record chunk ({type(exc).__name__}: {exc})") from exc
+
+
+def _json_file(p: Path) -> dict[str, Any]:
+    if not p.exists():
+        return {}
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        raise RecordError(f"{p}: not readable JSON ({type(exc).__name__}: {exc})") from exc
+    if not isinstance(data, dict):
+        raise RecordError(f"{p}: a JSON {type(data).__name__}, expected an object")
+    return data
 
 
 def load_stream(folder: Path) -> dict[str, np.ndarray]:
@@ -20,14 +51,10 @@ def load_stream(folder: Path) -> dict[str, np.ndarray]:
     parts = sorted((*Path(folder).glob("part-*.npy"), *Path(folder).glob("part-*.npz")), key=lambda p: p.stem)
     if not parts:
         return {}
-    chunks = []
-    for p in parts:
-        if p.suffix == ".npy":
-            a = np.load(p, allow_pickle=False)
-            chunks.append({k: a[k] for k in a.dtype.names})
-        else:
-            with np.load(p, allow_pickle=False) as z:
-                chunks.append({k: z[k] for k in z.files})
+    chunks = [_chunk(p) for p in parts]
+    for p, c in zip(parts[1:], chunks[1:], strict=True):
+        if c.keys() != chunks[0].keys():
+            raise RecordError(f"{p}: columns {sorted(c)} differ from those of {parts[0].name} {sorted(chunks[0])}")
     return {k: np.concatenate([c[k] for c in chunks]) for k in chunks[0]}
 
 
@@ -56,7 +83,8 @@ class RunRecord:
 
     @property
     def status(self) -> str:
-        """How the run ended: ``completed``, ``interrupted``, ``error`` or ``unknown`` (killed: no run_end event)."""
+        """How the run ended: ``completed``, ``interrupted``, ``diverged``, ``error`` or ``unknown`` (killed: no run_end
+        event)."""
         for ev in reversed(self.events):
             if ev.get("type") == "run_end":
                 return str(ev.get("status", "unknown"))
@@ -75,12 +103,19 @@ class RunRecord:
 
 
 def load_run(path: str | Path) -> RunRecord:
-    """Load a (possibly partial) run directory."""
+    """Load a (possibly partial) run directory.
+
+    Raises
+    ------
+    FileNotFoundError
+        No directory at ``path``.
+    RecordError
+        A file of it cannot be read (the message names the file).
+    """
     path = Path(path)
     if not path.is_dir():
         raise FileNotFoundError(f"no run directory at {path}")
-    run = json.loads((path / "run.json").read_text()) if (path / "run.json").exists() else {}
-    metrics = json.loads((path / "metrics.json").read_text()) if (path / "metrics.json").exists() else {}
+    run, metrics = _json_file(path / "run.json"), _json_file(path / "metrics.json")
     events: list[dict[str, Any]] = []
     ev_path = path / "events.jsonl"
     if ev_path.exists():

@@ -3,7 +3,7 @@ phases.
 
 1. vehicles apply actuator forces from their controllers' last outputs;
 2. the physics steps;
-3. low-level controllers run on the new state;
+3. low-level controllers run on the new state, and the divergence watchdog (:mod:`simulator.watchdog`) checks it;
 4. sensors due at this tick measure; their detections go to their agent, to the team protocols and to the teammates
    that take detections;
 5. agents due at this tick: each team protocol does its team-level work (:mod:`autonomy.team.base`), then every due
@@ -34,6 +34,7 @@ from simulator.comms import Comms, Outage
 from simulator.recording import Recording
 from simulator.slots import AgentSlot, SensorSlot
 from simulator.truth import Fleet, GroundFleet, Truth, UavFleet
+from simulator.watchdog import Watchdog
 from worlds.geometry import Building
 from worlds.roads.network import RoadNetwork
 from worlds.schema import World
@@ -95,6 +96,7 @@ class Assembly:
     latest_local: dict[int, TargetEstimate | None] = field(default_factory=dict)
     latest_setpoints: dict[int, Setpoint] = field(default_factory=dict)
     wall_s: dict[str, float] = field(default_factory=lambda: dict.fromkeys(WALL_PHASES, 0.0))  # wall time per phase
+    watchdog: Watchdog | None = None  # checks the state after each physics step (None: unchecked)
 
     def __post_init__(self) -> None:
         self._own_sensors = {a.uav: {s.name for s in self.sensors if s.uav == a.uav} for a in self.agents}
@@ -129,6 +131,8 @@ class Assembly:
         t2 = clock()
         for f in fleets:                       # 3. low-level controllers
             f.after_step(tick)
+        if self.watchdog is not None:          # before any sensor or agent reads a diverged state
+            self._watch(tick)
         t3 = clock()
         wall["vehicles"] += (t1 - t0) + (t3 - t2)
         wall["physics"] += t2 - t1
@@ -141,6 +145,12 @@ class Assembly:
         wall["autonomy"] += t5 - t4
         self._record(tick, t, fleets)          # 6. record
         wall["record"] += clock() - t5
+
+    def _watch(self, tick: int) -> None:
+        """The watchdog on the UAVs' state at every tick, and on the cars' at the ticks that record it (their state
+        is computed once per tick that reads it: the record ticks read it anyway)."""
+        cars = self.cars.state if self.cars is not None and tick % self.record_div == 0 else None
+        self.watchdog.check(tick, None if self.quads is None else self.quads.live_state, cars)
 
     def _sense(self, tick: int, t: float) -> None:
         due = [slot for slot in self.sensors if tick % slot.divisor == 0]

@@ -37,6 +37,11 @@ class UavFleet(Fleet, Protocol):
     @property
     def state(self) -> FleetState: ...
 
+    @property
+    def live_state(self) -> FleetState:
+        """The same state without copies, only to be read before the next step."""
+        ...
+
     def set_command(self, i: int, cmd: FlightSetpoint) -> None: ...
 
 

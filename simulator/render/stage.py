@@ -27,6 +27,7 @@ import trimesh
 
 from autonomy.sensing.camera import CAR_RGBA
 from simulator.render.projection import CameraView, perspective, to_gl
+from simulator.runrecord import RecordError
 from simulator.scene import BUILDING_RGBA, GROUND_RGBA, ROAD_RGBA, Scene, SceneConfig, _extrude
 from simulator.scene_query import try_load_egl
 from worlds.geometry import Building
@@ -122,10 +123,13 @@ def load_geometry(path: Path) -> StaticGeometry:
     """Buildings (cuboids where the footprint is a rectangle) and road centre-lines from ``geometry.npz``."""
     if not Path(path).exists():
         return StaticGeometry([], [])
-    with np.load(path) as g:
-        bxy, bo, heights = g["building_xy"], g["building_offsets"], g["building_height"]
-        rxy, ro = g["road_xy"], g["road_offsets"]
-        ids = [str(r) for r in g["road_ids"]] if "road_ids" in g.files else None
+    try:
+        with np.load(path, allow_pickle=False) as g:
+            bxy, bo, heights = g["building_xy"], g["building_offsets"], g["building_height"]
+            rxy, ro = g["road_xy"], g["road_offsets"]
+            ids = [str(r) for r in g["road_ids"]] if "road_ids" in g.files else None
+    except (OSError, ValueError, EOFError, KeyError) as exc:  # zipfile.BadZipFile is an OSError
+        raise RecordError(f"{path}: not a readable geometry file ({type(exc).__name__}: {exc})") from exc
     buildings = []
     for i in range(len(bo) - 1):
         fp = bxy[bo[i]:bo[i + 1]]

@@ -315,6 +315,13 @@ class QuadrotorFleet:
                           omega_B=st.omega_B.copy(), rotor_speed=self._rotors.omega.copy(), thrust=self._thrust.copy())
 
     @property
+    def live_state(self) -> FleetState:
+        """State after the last physics step, without copies: the arrays the fleet refills at every step, valid until
+        the next one and only to be read (for a check at every tick, where :attr:`state`'s copies would cost more
+        than the check)."""
+        return self._state
+
+    @property
     def tilt_limit(self) -> np.ndarray:
         """(N,) largest tilt the controllers command (rad): ``tilt_max - tilt_margin``."""
         return self._tv_ctrl.tilt_limit

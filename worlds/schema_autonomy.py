@@ -115,6 +115,19 @@ class TrackingSpec(Strict):
                                     "one since the track's last class reading (a swap where cars pass close): old "
                                     "readings are discounted so a swapped track's class evidence turns in a few "
                                     "readings; 0 keeps every reading")
+    search_detection_probability: float | Literal["auto"] = Field(
+        "auto", description="probability that one radar scan detects a target in the region it is searched in "
+        "(detection probability times the chance it is in line of sight): each scan that starts no track there makes "
+        "'the target is in no track' less likely by this factor; 0 never; auto: 0.3 when every radar of the UAV sees "
+        "stopped cars (min_detectable_velocity 0) all around (no fov), else 0 (a stopped target in the Doppler notch "
+        "or outside a sector is unseen however often the radar looks)")
+
+    @field_validator("search_detection_probability")
+    @classmethod
+    def _search_q(cls, value: float | str) -> float | str:
+        if value != "auto" and not 0 <= value < 1:
+            raise ValueError(f"a probability in [0, 1) or auto, got {value!r}")
+        return value
 
     @model_validator(mode="after")
     def _m_of_n(self) -> TrackingSpec:

@@ -65,7 +65,23 @@ def identity_config(world: World, uav: UavSpec, network: Any = None) -> Identity
                                           {k: len(v) for k, v in CAR_ATTRIBUTES.items()}),
         background_density=max(len(others), 1) / area,
         search_speed=spec.search_speed, min_probability=spec.min_target_probability,
-        swap_probability=spec.swap_probability)
+        swap_probability=spec.swap_probability, search_detection_probability=search_detection_probability(uav))
+
+
+SEARCH_DETECTION_PROBABILITY = 0.3
+"""``tracking.search_detection_probability: auto`` for a UAV whose radars see a target anywhere around, stopped or
+not: a radar's detection probability (0.9-0.95 in the shipped worlds) times about a third for the chance that a car
+in a town is in its line of sight from a UAV's altitude and standoff."""
+
+
+def search_detection_probability(uav: UavSpec) -> float:
+    """The UAV's ``tracking.search_detection_probability``, ``auto`` resolved (its schema description)."""
+    value = uav.autonomy.estimator.tracking.search_detection_probability
+    if value != "auto":
+        return float(value)
+    radars = [s for s in uav.sensors if s.type == "radar"]
+    sees_all = radars and all(s.min_detectable_velocity == 0 and s.fov is None for s in radars)
+    return SEARCH_DETECTION_PROBABILITY if sees_all else 0.0
 
 
 def _multi_config(uav: UavSpec) -> MultiTrackerConfig:

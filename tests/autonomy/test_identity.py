@@ -205,3 +205,30 @@ def test_a_target_track_whose_readings_turn_moves_the_search_centre_to_it():
     mean, S = ident.search_estimate(20.0)
     np.testing.assert_allclose(mean, [150.0, 40.0])
     np.testing.assert_allclose(S, np.eye(2) * 9.0)
+
+
+def test_scans_that_start_nothing_where_the_target_is_searched_make_no_track_less_likely():
+    """Each position-fixing scan with no unassigned fix in the search region's 99 % ellipse scales the odds of
+    "in no track" against every track by 1 − q exactly; an unassigned fix inside the ellipse (perhaps the target's)
+    leaves them."""
+    q = 0.3
+    ident = TargetIdentity(_config(background_density=1e-4, search_detection_probability=q))
+    ident.cue(0.0, np.zeros(2), sigma_m=10.0)
+    ident.confirmed(1, 0.0, np.array([25.0, 0.0]), np.eye(2), evidence=0.0)
+    ident.confirmed(2, 0.0, np.array([0.0, 20.0]), np.eye(2), evidence=1.0)
+    odds = ident.w_none / ident.probability(1)
+    ratio = ident.probability(2) / ident.probability(1)
+    ident.scanned(0.5, [np.array([500.0, 500.0])])  # far from the cue
+    assert ident.w_none / ident.probability(1) == pytest.approx(odds * (1 - q), rel=1e-12)
+    assert ident.probability(2) / ident.probability(1) == pytest.approx(ratio, rel=1e-12)
+    before = ident.w_none
+    ident.scanned(1.0, [np.array([500.0, 500.0]), np.array([12.0, -8.0])])  # a new fix near the cue
+    assert ident.w_none == pytest.approx(before, rel=1e-12)
+    for k in range(30):
+        ident.scanned(1.5 + 0.5 * k, [])
+    assert ident.w_none < 1e-3 and ident.target() == 2
+    off = TargetIdentity(_config(background_density=1e-4))
+    off.confirmed(1, 0.0, np.array([200.0, 0.0]), np.eye(2), evidence=0.0)
+    w0 = off.w_none
+    off.scanned(0.5, [])
+    assert off.w_none == w0

@@ -80,3 +80,20 @@ def test_hcmci_among_traffic_runs_on_the_target_tracks(tmp_path):
     assert m["targets"]["car1"]["uav1"]["identity_fraction"] > 0.9
     for u in ("uav1", "uav2"):
         assert m["uavs"][u]["consensus_linked_steps"] > 50
+
+
+def test_search_detection_probability_auto_only_where_radars_see_stopped_cars_all_around():
+    from simulator.builders.multi_target import SEARCH_DETECTION_PROBABILITY, search_detection_probability
+    from worlds.loader import load_world
+
+    traffic = load_world("road_standoff_traffic").world  # radars without a Doppler notch or a sector
+    assert [search_detection_probability(u) for u in traffic.uavs] == [SEARCH_DETECTION_PROBABILITY] * 2
+    demo = load_world("demo").world  # its radars have the default 1 m/s notch: a stopped target is unseen
+    assert all(search_detection_probability(u) == 0.0 for u in demo.uavs)
+    notch = load_world("road_standoff_traffic", overrides=["uavs[0].sensors[0].min_detectable_velocity=1.0"]).world
+    assert search_detection_probability(notch.uavs[0]) == 0.0
+    assert search_detection_probability(notch.uavs[1]) == SEARCH_DETECTION_PROBABILITY
+    given = load_world("demo", overrides=["uavs[0].autonomy.estimator.tracking.search_detection_probability=0.5"])
+    assert search_detection_probability(given.world.uavs[0]) == 0.5
+    with pytest.raises(WorldError, match="search_detection_probability"):
+        load_world("demo", overrides=["uavs[0].autonomy.estimator.tracking.search_detection_probability=1.5"])

@@ -28,6 +28,13 @@ Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` 
   ``(search_speed · Δt)²`` per axis since then). So ``w_k ← w_k ρ``, ``w_j = w_0 e^{E_j} p_T(x_j)``,
   ``w_0 ← w_0 ρ``, normalised: a car that shows up nearer the cue later (the target was stopped, or hidden) takes
   the belief from one that showed up first but farther;
+- **a radar scan that starts no new car near the search region**: under ``H_0`` the target is somewhere in the
+  search region, unseen; a radar whose field of regard covers the region would have detected it with probability
+  ``q`` (``search_detection_probability``: the radar's detection probability times the chance the target is in its
+  line of sight, a property of the sensor and the town), and its detection would have started a track there. So every
+  position-fixing scan none of whose unassigned detections falls in the search region's 99 % ellipse multiplies
+  ``w_0`` by ``1 − q``: the target's no longer being in any track becomes implausible while every car in view is
+  tracked, and a track that read the target's class (rather than one that only inherited the belief) takes it;
 - **a deleted track** k: ``w_0 ← w_0 + w_k``; if ``H_k`` was the likelier of the two, the track's last estimate
   becomes where the target is believed to be (so a lost target is re-acquired from the tracks born near where it was
   last seen, with the search region growing with time).
@@ -48,6 +55,8 @@ import numpy as np
 
 __all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "accumulate_readings", "background_frequencies",
            "track_evidence"]
+
+_CHI2_2_99 = 9.2103  # the 99 % quantile of χ² with 2 degrees of freedom
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -70,6 +79,9 @@ class IdentityConfig:
         Smallest probability in (0, 1] of the most probable track for it to be taken as the target.
     swap_probability : float
         Probability in [0, 1) that the car under a track changed since its last class reading (module docstring).
+    search_detection_probability : float
+        Probability in [0, 1) that one position-fixing scan detects a target in the search region (module docstring;
+        0: the target's being in no track is never made less likely by scans that find nothing there).
     """
 
     target_classes: Mapping[str, int]
@@ -78,12 +90,16 @@ class IdentityConfig:
     search_speed: float = 8.0
     min_probability: float = 0.2
     swap_probability: float = 0.02
+    search_detection_probability: float = 0.0
 
     def __post_init__(self) -> None:
         if not self.background_density > 0:
             raise ValueError(f"IdentityConfig.background_density must be > 0 cars/m², got {self.background_density!r}")
         if not self.search_speed > 0:
             raise ValueError(f"IdentityConfig.search_speed must be > 0 m/s, got {self.search_speed!r}")
+        if not 0 <= self.search_detection_probability < 1:
+            raise ValueError(f"IdentityConfig.search_detection_probability must be in [0, 1), got "
+                             f"{self.search_detection_probability!r}")
         if not 0 <= self.swap_probability < 1:
             raise ValueError(f"IdentityConfig.swap_probability must be in [0, 1), got {self.swap_probability!r}")
         if not 0 < self.min_probability <= 1:
@@ -239,6 +255,22 @@ class TargetIdentity:
                                        v=np.asarray(v, dtype=float)[:2].copy(),
                                        P=np.asarray(P, dtype=float)[:2, :2].copy())
         self.w_none += w
+        self._normalise()
+
+    def scanned(self, t: float, unassigned: Sequence[np.ndarray]) -> None:
+        """A position-fixing scan at ``t`` (s) whose detections that no confirmed track took fixed the ground
+        positions ``unassigned`` (m): unless one of them lies in the search region's 99 % ellipse, ``H_0`` is less
+        likely by ``1 − q`` (module docstring)."""
+        q = self.config.search_detection_probability
+        if q <= 0.0 or not self.weights:
+            return
+        if self.centre is not None and len(unassigned):
+            mean, S = self.centre.at(t, self.config.search_speed)
+            d = np.asarray(unassigned, dtype=float)[:, :2] - mean
+            maha = np.einsum("ni,ij,nj->n", d, np.linalg.inv(S), d)
+            if np.any(maha <= _CHI2_2_99):
+                return
+        self.w_none *= 1.0 - q
         self._normalise()
 
     def merged(self, kept: int, dropped: int) -> None:

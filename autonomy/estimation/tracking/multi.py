@@ -308,10 +308,22 @@ class MultiTargetTracker:
                 if W[i, 0] < 0.5:
                     hit.add(id(track))
         if fixing:
-            self._confirmations(live, hit, t_meas)
             unused = [result.detections[j] for j in result.unused]
-            self._initiate(self.fixer.fixes(unused))
+            fixes = self.fixer.fixes(unused)
+            if self.identity.config.search_detection_probability > 0:
+                self._searched(t_meas, live, result, fixes)
+            self._confirmations(live, hit, t_meas)
+            self._initiate(fixes)
         self._merge()
+
+    def _searched(self, t_meas: float, live: Sequence[Track], result: object, fixes: Sequence) -> None:
+        """The identity belief's negative information from a position-fixing scan: the ground fixes of the
+        detections no confirmed track took (unassigned ones, and those tentative tracks took)."""
+        points = [xy for _, xy, _ in fixes]
+        if result.weights is None:
+            tentative = [result.detections[j] for i, j in result.pairs if not live[i].confirmed]
+            points += [xy for _, xy, _ in self.fixer.fixes(tentative)]
+        self.identity.scanned(t_meas, points)
 
     def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
         track.last_update_t = t_meas

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from simulator.campaign.config import RunReport
+from simulator.campaign.config import FAILED, RunReport
 from simulator.record import atomic_write_text
 
 __all__ = ["CampaignSummary", "MetricStats", "format_table", "metric_stats", "summarize", "write_summary"]
@@ -133,7 +133,7 @@ def summarize(reports: Iterable[RunReport] | Iterable[Mapping[str, Any]]) -> Cam
     for rep in reports:
         data = rep.to_json() if isinstance(rep, RunReport) else dict(rep)
         runs += 1
-        if data.get("status") == "error":
+        if data.get("status") in FAILED:
             failures.append((int(data.get("index", runs - 1)), str(data.get("error"))))
         if data.get("status") != "completed":
             continue

@@ -20,7 +20,10 @@ import numpy as np
 
 from worlds.loader import LoadedWorld
 
-__all__ = ["CampaignConfig", "CampaignError", "CampaignParams", "RunTask", "RunReport", "run_seed", "run_dir_name"]
+__all__ = ["FAILED", "CampaignConfig", "CampaignError", "CampaignParams", "RunTask", "RunReport", "run_seed", "run_dir_name"]
+
+FAILED = ("error", "diverged")
+"""Statuses of a run that ended for good without completing."""
 
 
 class CampaignError(ValueError):
@@ -78,7 +81,8 @@ class RunReport:
     index, seed : int
         As in the :class:`RunTask`.
     status : str
-        ``completed``, ``error`` or ``interrupted`` (interrupted runs are not journaled: they run again on resume).
+        ``completed``, ``error``, ``diverged`` (the physics blew up: a failed run, like ``error``) or ``interrupted``
+        (interrupted runs are not journaled: they run again on resume).
     error : str | None
         ``"ExceptionType: message"`` when the run failed, else None.
     wall_time_s : float
@@ -102,8 +106,9 @@ class RunReport:
     files: dict[str, list] | None = None
 
     def __post_init__(self) -> None:
-        if self.status not in ("completed", "error", "interrupted"):
-            raise ValueError(f"RunReport.status must be completed, error or interrupted, got {self.status!r}")
+        if self.status not in ("completed", *FAILED, "interrupted"):
+            raise ValueError(f"RunReport.status must be completed, error, diverged or interrupted, got "
+                             f"{self.status!r}")
         for name, kind in (("index", int), ("seed", int), ("metrics", dict), ("run_dir", str)):
             if not isinstance(getattr(self, name), kind) or isinstance(getattr(self, name), bool):
                 raise ValueError(f"RunReport.{name} must be {kind.__name__}, got {getattr(self, name)!r:.60}")
@@ -115,7 +120,7 @@ class RunReport:
     @property
     def finished(self) -> bool:
         """True when the run need not run again (it completed or failed for good)."""
-        return self.status in ("completed", "error")
+        return self.status == "completed" or self.status in FAILED
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

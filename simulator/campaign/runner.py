@@ -25,7 +25,7 @@ from pathlib import Path
 
 from simulator.campaign.aggregate import CampaignSummary, summarize, write_summary
 from simulator.campaign.backends import Backend, LocalPoolBackend, RayBackend
-from simulator.campaign.config import (CampaignConfig, CampaignParams, RunReport, RunTask, run_dir_name,
+from simulator.campaign.config import (FAILED, CampaignConfig, CampaignParams, RunReport, RunTask, run_dir_name,
                                        run_seed)
 from simulator.campaign.journal import CampaignJournal
 from simulator.campaign.worker import run_one
@@ -127,7 +127,7 @@ def _execute(config: CampaignConfig, backend: Backend, tasks: list[RunTask], jou
         return 0
     from tqdm import tqdm
 
-    counts = {"done": len(journal.finished()), "failed": sum(r.status == "error" for r in journal.reports.values())}
+    counts = {"done": len(journal.finished()), "failed": sum(r.status in FAILED for r in journal.reports.values())}
     bar = tqdm(total=journal.params.runs, initial=counts["done"], unit="run", desc=f"campaign {name}",
                disable=not config.progress, dynamic_ncols=True)
     bar.set_postfix(failed=counts["failed"])
@@ -140,7 +140,7 @@ def _execute(config: CampaignConfig, backend: Backend, tasks: list[RunTask], jou
         journal.record(report)
         if report.finished:
             counts["done"] += 1
-            counts["failed"] += report.status == "error"
+            counts["failed"] += report.status in FAILED
             bar.update(1)
             bar.set_postfix(failed=counts["failed"])
 

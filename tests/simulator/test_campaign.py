@@ -107,6 +107,21 @@ def test_crashing_runs_are_recorded_and_the_campaign_goes_on(tmp_path, monkeypat
     assert "estimator failed on purpose" in capsys.readouterr().err
 
 
+def test_a_diverged_run_is_a_failed_run_for_good():
+    """A run the watchdog stopped (status diverged) is journaled, not redone on resume, and counted as a failure."""
+    from simulator.campaign.aggregate import summarize
+    from simulator.campaign.config import RunReport
+
+    reports = [RunReport(index=0, seed=1, status="completed", error=None, wall_time_s=1.0, metrics={"x": 1.0}),
+               RunReport(index=1, seed=2, status="diverged", error="uav1 below the ground at tick 9", wall_time_s=1.0)]
+    assert reports[1].finished
+    summary = summarize(reports)
+    assert summary.completed == 1 and summary.failed == 1
+    assert summary.failures == ((1, "uav1 below the ground at tick 9"),)
+    with pytest.raises(ValueError, match="diverged"):
+        RunReport(index=2, seed=3, status="exploded", error=None, wall_time_s=1.0)
+
+
 def test_invalid_world_is_refused_before_any_run(tmp_path, capsys):
     assert main(["campaign", "demo", "--runs", "2", "--quiet", "--out", str(tmp_path / "x"),
                  "--set", "sim.duration_s=-4"]) == 2

@@ -20,7 +20,8 @@ import numpy as np
 
 from worlds.loader import LoadedWorld
 
-__all__ = ["FAILED", "CampaignConfig", "CampaignError", "CampaignParams", "RunTask", "RunReport", "run_seed", "run_dir_name"]
+__all__ = ["FAILED", "CampaignConfig", "CampaignError", "CampaignParams", "RunTask", "RunReport", "run_seed",
+           "run_dir_name"]
 
 FAILED = ("error", "diverged")
 """Statuses of a run that ended for good without completing."""

@@ -139,13 +139,8 @@ def _sidecar(lib: Path) -> Path:
 
 def _digest(path: Path) -> tuple[int, str]:
     """(size in bytes, SHA-256 hex) of a file's contents."""
-    h = hashlib.sha256()
-    size = 0
     with path.open("rb") as f:
-        while chunk := f.read(1 << 20):
-            h.update(chunk)
-            size += len(chunk)
-    return size, h.hexdigest()
+        return os.fstat(f.fileno()).st_size, hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _verified(lib: Path) -> bool:

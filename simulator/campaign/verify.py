@@ -11,6 +11,7 @@ chunk must load with ``numpy.load(allow_pickle=False)``.
 from __future__ import annotations
 
 import hashlib
+import os
 import json
 import zipfile
 from pathlib import Path
@@ -23,13 +24,8 @@ __all__ = ["damage", "manifest"]
 
 
 def _digest(path: Path) -> tuple[int, str]:
-    h = hashlib.sha256()
-    size = 0
     with path.open("rb") as f:
-        while chunk := f.read(1 << 20):
-            h.update(chunk)
-            size += len(chunk)
-    return size, h.hexdigest()
+        return os.fstat(f.fileno()).st_size, hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def manifest(run_dir: Path) -> dict[str, list]:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from yaml_paths import key_paths
 from hypothesis import HealthCheck, Phase, given, note, settings
 from hypothesis import strategies as st
 from world_files import write
@@ -368,18 +369,9 @@ RAW = {name: yaml.safe_load(path.read_text(encoding="utf-8")) for name, path in 
 TEXT = {name: path.read_bytes() for name, path in shipped_worlds().items()}
 
 
-def _paths(node: object, loc: tuple = ()) -> list[tuple]:
-    out = [loc] if loc else []
-    if isinstance(node, dict):
-        for key, value in node.items():
-            out += _paths(value, loc + (key,))
-    elif isinstance(node, list):
-        for i, value in enumerate(node):
-            out += _paths(value, loc + (i,))
-    return out
 
 
-PATHS = {name: _paths(raw) for name, raw in RAW.items()}
+PATHS = {name: key_paths(raw) for name, raw in RAW.items()}
 
 HOSTILE = (float("nan"), float("inf"), -float("inf"), 0, -1, 1e-300, 1e300, 2**70, -(2**70), 10**400 - 1, True,
            None, "", "../../x", "/abs", "x" * 10_000, "\x00", [], {}, [[[[[[[[[[]]]]]]]]]], [1e300] * 3,

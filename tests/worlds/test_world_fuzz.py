@@ -14,6 +14,7 @@ import copy
 from pathlib import Path
 
 import yaml
+from yaml_paths import key_paths
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
@@ -39,19 +40,10 @@ def _raw(name: str) -> dict:
     return yaml.safe_load(shipped_worlds()[name].read_text(encoding="utf-8"))
 
 
-def _paths(node: object, loc: tuple = ()) -> list[tuple]:
-    out = [loc] if loc else []
-    if isinstance(node, dict):
-        for key, value in node.items():
-            out += _paths(value, loc + (key,))
-    elif isinstance(node, list):
-        for i, value in enumerate(node):
-            out += _paths(value, loc + (i,))
-    return out
 
 
 RAW = {name: _raw(name) for name in FUZZ_WORLDS}
-PATHS = {name: [p for p in _paths(raw) if p[0] not in FREE_TEXT] for name, raw in RAW.items()}
+PATHS = {name: [p for p in key_paths(raw) if p[0] not in FREE_TEXT] for name, raw in RAW.items()}
 
 
 @st.composite

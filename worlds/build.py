@@ -103,6 +103,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
                     sample = ", ".join(list(network.roads)[:6])
                     issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; "
                                                        f"a street 's' gives roads 's.f' and 's.r')"))
+    issues += _starts_in_buildings(world, buildings[:len(buildings) - len(world.buildings)])
     if issues:
         raise WorldError(file, issues)
 
@@ -130,6 +131,33 @@ def _import_osm(path: Path, bbox: Any, default_height: float) -> tuple[Any, Any]
     params = repr((None if bbox is None else tuple(bbox), float(default_height)))
     key = [hashlib.sha256(path.read_bytes()).digest(), params]
     return cached("osm", key, build)
+
+
+def _starts_in_buildings(world: World, generated: list[Building]) -> list[WorldIssue]:
+    """A UAV starting inside (or within :data:`~worlds.checks.START_CLEARANCE` of) a building of the town or the map:
+    the loader checks the world file's own ``buildings`` (:mod:`worlds.checks`); these exist only once built."""
+    if not generated:
+        return []
+    from shapely import Point, Polygon
+
+    from worlds.checks import START_CLEARANCE
+
+    lo = np.array([b.footprint.min(axis=0) for b in generated]) - START_CLEARANCE
+    hi = np.array([b.footprint.max(axis=0) for b in generated]) + START_CLEARANCE
+    top = np.array([b.base_z + b.height for b in generated]) + START_CLEARANCE
+    issues = []
+    for i, uav in enumerate(world.uavs):
+        x, y, z = (float(c) for c in uav.initial.position)
+        near = np.flatnonzero((lo[:, 0] <= x) & (x <= hi[:, 0]) & (lo[:, 1] <= y) & (y <= hi[:, 1]) & (z <= top))
+        for k in near:
+            b = generated[int(k)]
+            if Polygon(b.footprint).distance(Point(x, y)) <= START_CLEARANCE and z >= b.base_z - START_CLEARANCE:
+                issues.append(WorldIssue(f"uavs[{i}].initial.position", [x, y, z],
+                                         f"a start outside every building, at least {START_CLEARANCE:g} m from its "
+                                         f"walls and roof: the map's building {b.name or k} (height {b.height:g} m) "
+                                         f"holds it"))
+                break
+    return issues
 
 
 def _value_at(world: World, dotted: str) -> Any:

@@ -167,7 +167,7 @@ def _start_issues(world: World) -> list[WorldIssue]:
 def _building_at(world: World, position: tuple[float, float, float]) -> int | None:
     """Index of the first of ``world.buildings`` (cuboids) whose shape grown by :data:`START_CLEARANCE` holds
     ``position``, or None. The buildings of a ``town`` or an ``osm`` map are generated when the world is built and
-    are not checked here."""
+    checked then (``worlds.build``)."""
     x, y, z = position
     for k, b in enumerate(world.buildings):
         length, width, height = b.size

@@ -212,7 +212,7 @@ def test_scans_that_start_nothing_where_the_target_is_searched_make_no_track_les
     "in no track" against every track by 1 − q exactly; an unassigned fix inside the ellipse (perhaps the target's)
     leaves them."""
     q = 0.3
-    ident = TargetIdentity(_config(background_density=1e-4, search_detection_probability=q))
+    ident = TargetIdentity(_config(background_density=1e-4, search_detection_probability=q, swap_probability=0.0))
     ident.cue(0.0, np.zeros(2), sigma_m=10.0)
     ident.confirmed(1, 0.0, np.array([25.0, 0.0]), np.eye(2), evidence=0.0)
     ident.confirmed(2, 0.0, np.array([0.0, 20.0]), np.eye(2), evidence=1.0)
@@ -227,8 +227,37 @@ def test_scans_that_start_nothing_where_the_target_is_searched_make_no_track_les
     for k in range(30):
         ident.scanned(1.5 + 0.5 * k, [])
     assert ident.w_none < 1e-3 and ident.target() == 2
-    off = TargetIdentity(_config(background_density=1e-4))
+    off = TargetIdentity(_config(background_density=1e-4, swap_probability=0.0))
     off.confirmed(1, 0.0, np.array([200.0, 0.0]), np.eye(2), evidence=0.0)
     w0 = off.w_none
     off.scanned(0.5, [])
     assert off.w_none == w0
+
+
+def test_two_tracks_a_scan_could_not_tell_apart_share_their_continuity_but_keep_their_evidence():
+    """Track 1 inherited the belief; track 2, born later, reads the target's class. While the two are unresolved
+    each scan moves their continuity parts c_k = w_k e^{-E_k} towards each other by δ: after n scans the sum is
+    kept and the difference is (1 − 2δ)^n times the first, "in no track" keeping c_0, while p_k ∝ c_k e^{E_k}; so
+    track 2 takes the belief. Scans that resolve them change nothing."""
+    delta = 0.05
+    ident = TargetIdentity(_config(background_density=1e-4, swap_probability=delta))
+    ident.cue(0.0, np.zeros(2), sigma_m=10.0)
+    ident.confirmed(1, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    ident.confirmed(2, 1.0, np.array([400.0, 0.0]), np.eye(2), evidence=0.0)
+    assert ident.probability(2) < 1e-6
+    ident.read(1, -2.0)
+    ident.read(2, 2.0)
+    before = (ident.probability(1), ident.probability(2), ident.w_none)
+    ident.scanned(1.5, [])  # resolved: nothing changes
+    assert (ident.probability(1), ident.probability(2), ident.w_none) == pytest.approx(before, rel=1e-12)
+    E = {1: -2.0, 2: 2.0}
+    c0 = {k: ident.probability(k) * math.exp(-E[k]) for k in (1, 2)} | {0: ident.w_none}
+    n = 30
+    for k in range(n):
+        ident.scanned(2.0 + 0.5 * k, [], unresolved=[(1, 2)])
+    mean, diff = (c0[1] + c0[2]) / 2, (c0[1] - c0[2]) / 2 * (1 - 2 * delta) ** n
+    c = {0: c0[0], 1: mean + diff, 2: mean - diff}
+    z = c[0] + c[1] * math.exp(E[1]) + c[2] * math.exp(E[2])
+    assert ident.probability(2) == pytest.approx(c[2] * math.exp(E[2]) / z, rel=1e-9)
+    assert ident.probability(1) == pytest.approx(c[1] * math.exp(E[1]) / z, rel=1e-9)
+    assert ident.target() == 2

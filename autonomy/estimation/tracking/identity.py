@@ -35,6 +35,10 @@ Hypotheses ``H_k`` (the target is track k, one per confirmed track) and ``H_0`` 
   position-fixing scan none of whose unassigned detections falls in the search region's 99 % ellipse multiplies
   ``w_0`` by ``1 − q``: the target's no longer being in any track becomes implausible while every car in view is
   tracked, and a track that read the target's class (rather than one that only inherited the belief) takes it;
+- **two tracks such a scan could not tell apart** (their estimates' difference inside the 99 % χ² gate of their
+  summed covariances) may have swapped cars: each weight is a continuity part (from births, deaths and merges) times
+  the class evidence ``e^{E_k}``, and the pair's continuity parts move towards each other by ``swap_probability``, so
+  after two cars met, their own class readings decide which carries the target;
 - **a deleted track** k: ``w_0 ← w_0 + w_k``; if ``H_k`` was the likelier of the two, the track's last estimate
   becomes where the target is believed to be (so a lost target is re-acquired from the tracks born near where it was
   last seen, with the search region growing with time).
@@ -257,12 +261,16 @@ class TargetIdentity:
         self.w_none += w
         self._normalise()
 
-    def scanned(self, t: float, unassigned: Sequence[np.ndarray]) -> None:
+    def scanned(self, t: float, unassigned: Sequence[np.ndarray], unresolved: Sequence[tuple[int, int]] = ()) -> None:
         """A position-fixing scan at ``t`` (s) whose detections that no confirmed track took fixed the ground
-        positions ``unassigned`` (m): unless one of them lies in the search region's 99 % ellipse, ``H_0`` is less
-        likely by ``1 − q`` (module docstring)."""
+        positions ``unassigned`` (m): the pairs of tracks it could not tell apart (``unresolved``) may have swapped
+        (:meth:`_forget_continuity`), and unless one of ``unassigned`` lies in the search region's 99 % ellipse,
+        ``H_0`` is less likely by ``1 − q`` (module docstring)."""
+        if not self.weights:
+            return
+        self._forget_continuity(self.config.swap_probability, unresolved)
         q = self.config.search_detection_probability
-        if q <= 0.0 or not self.weights:
+        if q <= 0.0:
             return
         if self.centre is not None and len(unassigned):
             mean, S = self.centre.at(t, self.config.search_speed)
@@ -271,6 +279,22 @@ class TargetIdentity:
             if np.any(maha <= _CHI2_2_99):
                 return
         self.w_none *= 1.0 - q
+        self._normalise()
+
+    def _forget_continuity(self, delta: float, unresolved: Sequence[tuple[int, int]]) -> None:
+        """One scan of the chance ``delta`` that two unresolved tracks (``unresolved``: pairs of track ids whose
+        estimates the scan could not tell apart) swapped their cars: each weight is its continuity part
+        ``c_k = w_k e^{−E_k}`` times its class evidence ``e^{E_k}``; the pair's continuity parts move by ``delta``
+        towards each other (``c_i, c_j ← (1 − δ) c_i + δ c_j, (1 − δ) c_j + δ c_i``), the evidence parts stay. So a
+        track that passed close to the target's while the belief was on the other is not held down for ever by that
+        history, and its own class readings can take the belief; tracks that never met keep their continuity."""
+        if delta <= 0.0 or not unresolved:
+            return
+        c = {k: w * math.exp(-self.evidence.get(k, 0.0)) for k, w in self.weights.items()}
+        for a, b in unresolved:
+            if a in c and b in c:
+                c[a], c[b] = (1.0 - delta) * c[a] + delta * c[b], (1.0 - delta) * c[b] + delta * c[a]
+        self.weights = {k: ck * math.exp(self.evidence.get(k, 0.0)) for k, ck in c.items()}
         self._normalise()
 
     def merged(self, kept: int, dropped: int) -> None:

@@ -47,7 +47,11 @@ from .track import Track
 if TYPE_CHECKING:
     from autonomy.estimation.tracker import TrackerConfig
 
-__all__ = ["MultiTargetTracker", "MultiTrackerConfig"]
+__all__ = ["UNRESOLVED_RADIUS_M", "MultiTargetTracker", "MultiTrackerConfig"]
+
+UNRESOLVED_RADIUS_M = 100.0
+"""Two tracks farther apart than this (m) are never taken for unresolved (a bound before the χ² test)."""
+CHI2_2_99 = 9.2103  # the 99 % quantile of χ² with 2 degrees of freedom
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -310,11 +314,25 @@ class MultiTargetTracker:
         if fixing:
             unused = [result.detections[j] for j in result.unused]
             fixes = self.fixer.fixes(unused)
-            if self.identity.config.search_detection_probability > 0:
-                self._searched(t_meas, live, result, fixes)
+            self._searched(t_meas, live, result, fixes)
             self._confirmations(live, hit, t_meas)
             self._initiate(fixes)
         self._merge()
+
+    def _unresolved(self, live: Sequence[Track]) -> list[tuple[int, int]]:
+        """Pairs of ids of confirmed tracks the identity belief holds whose estimates' difference lies inside the
+        99 % χ² gate of their summed position covariances (within ``UNRESOLVED_RADIUS_M`` first)."""
+        held = [tr for tr in live if tr.confirmed and tr.track_id in self.identity.weights]
+        if len(held) < 2:
+            return []
+        p = np.array([tr.filter.x[self._ix] for tr in held])
+        out = []
+        for a, b in cKDTree(p).query_pairs(UNRESOLVED_RADIUS_M):
+            d = p[a] - p[b]
+            S = held[a].filter.P[np.ix_(self._ix, self._ix)] + held[b].filter.P[np.ix_(self._ix, self._ix)]
+            if float(d @ np.linalg.solve(S, d)) <= CHI2_2_99:
+                out.append((held[a].track_id, held[b].track_id))
+        return out
 
     def _searched(self, t_meas: float, live: Sequence[Track], result: object, fixes: Sequence) -> None:
         """The identity belief's negative information from a position-fixing scan: the ground fixes of the
@@ -323,7 +341,7 @@ class MultiTargetTracker:
         if result.weights is None:
             tentative = [result.detections[j] for i, j in result.pairs if not live[i].confirmed]
             points += [xy for _, xy, _ in self.fixer.fixes(tentative)]
-        self.identity.scanned(t_meas, points)
+        self.identity.scanned(t_meas, points, self._unresolved(live))
 
     def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
         track.last_update_t = t_meas

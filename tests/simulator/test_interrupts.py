@@ -12,6 +12,11 @@ import pytest
 from simulator.interrupts import DeferredInterrupts, caused_by_interrupt
 
 
+@pytest.fixture(autouse=True)
+def _sigint(sigint_raises):
+    """Every test here starts with SIGINT raising (the conftest's ``sigint_raises``)."""
+
+
 def _terminate(signum, frame):
     raise KeyboardInterrupt(f"signal {signum}")
 

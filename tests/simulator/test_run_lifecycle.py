@@ -23,6 +23,7 @@ from simulator.render.encode import VideoEncoder
 from simulator.rundir import RunDirError, fresh_run_dir, is_run_dir
 from simulator.runrecord import RecordError, load_run, load_search_sets
 from simulator.watchdog import Watchdog
+from tests.simulator.conftest import sigint_as_in_a_terminal
 from worlds.loader import load_world
 
 QUICK = ["--duration", "0.05", "--no-plots", "--quiet"]
@@ -184,7 +185,7 @@ def test_a_diverged_run_exits_3(tmp_path, monkeypatch, capsys):
 
 
 # -- interruption ----------------------------------------------------------------------------------------------------
-def test_a_signal_inside_a_component_ends_the_run_between_ticks(tmp_path):
+def test_a_signal_inside_a_component_ends_the_run_between_ticks(tmp_path, sigint_raises):
     class Signalled:
         finished = []
 
@@ -284,7 +285,8 @@ def test_ctrl_c_during_the_nmpc_solves_is_an_interruption(tmp_path, delay_s):
     out = tmp_path / "nmpc"
     proc = subprocess.Popen([sys.executable, "-m", "simulator.cli", "run", "road_standoff", "--duration", "120",
                              "--out", str(out), "--quiet", "--no-plots", "--set", "sim.flush_every_s=0.5"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=sigint_as_in_a_terminal)
     try:
         deadline = time.monotonic() + 300
         while not (out / "metrics.json").exists() and time.monotonic() < deadline and proc.poll() is None:

@@ -57,10 +57,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IdentityConfig", "SearchCentre", "TargetIdentity", "accumulate_readings", "background_frequencies",
-           "track_evidence"]
+__all__ = ["CHI2_2_99", "IdentityConfig", "SearchCentre", "TargetIdentity", "accumulate_readings",
+           "background_frequencies", "track_evidence"]
 
-_CHI2_2_99 = 9.2103  # the 99 % quantile of χ² with 2 degrees of freedom
+CHI2_2_99 = 9.2103
+"""The 99 % quantile of χ² with 2 degrees of freedom: a search region's, or two tracks' difference's, gate."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -276,7 +277,7 @@ class TargetIdentity:
             mean, S = self.centre.at(t, self.config.search_speed)
             d = np.asarray(unassigned, dtype=float)[:, :2] - mean
             maha = np.einsum("ni,ij,nj->n", d, np.linalg.inv(S), d)
-            if np.any(maha <= _CHI2_2_99):
+            if np.any(maha <= CHI2_2_99):
                 return
         self.w_none *= 1.0 - q
         self._normalise()

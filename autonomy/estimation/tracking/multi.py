@@ -38,7 +38,7 @@ from interfaces.state import TargetEstimate, TrackReport
 from .batch_update import update_pairs
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
-from .identity import IdentityConfig, TargetIdentity, accumulate_readings, track_evidence
+from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, track_evidence
 from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -51,7 +51,6 @@ __all__ = ["UNRESOLVED_RADIUS_M", "MultiTargetTracker", "MultiTrackerConfig"]
 
 UNRESOLVED_RADIUS_M = 100.0
 """Two tracks farther apart than this (m) are never taken for unresolved (a bound before the χ² test)."""
-CHI2_2_99 = 9.2103  # the 99 % quantile of χ² with 2 degrees of freedom
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -105,12 +105,20 @@ def map_summary(loaded: Any, geometry: Any) -> MapSummary:
                       uavs=[u.id for u in world.uavs], ground_vehicles=roles, target_routes=routes)
 
 
-def _validate(args: argparse.Namespace) -> int:
+def _load_or_report(command: str, args: argparse.Namespace) -> tuple[Any, Any] | None:
+    """:func:`_load` of the command's world and ``--set`` lines, or None after printing the world error as
+    ``skytrack COMMAND: …`` on stderr."""
     try:
-        loaded, geometry = _load(args.world, args.set or [])
+        return _load(args.world, args.set or [])
     except WorldError as exc:
-        print(f"skytrack validate: {exc}", file=sys.stderr)
+        print(f"skytrack {command}: {exc}", file=sys.stderr)
+        return None
+
+
+def _validate(args: argparse.Namespace) -> int:
+    if (got := _load_or_report("validate", args)) is None:
         return 2
+    loaded, geometry = got
     w = loaded.world
     net = geometry.network
     cars = ", ".join(f"{n} {role}" for role, n in map_summary(loaded, geometry).ground_vehicles.items()) or "none"
@@ -121,12 +129,9 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 def _inspect(args: argparse.Namespace) -> int:
-    try:
-        loaded, geometry = _load(args.world, args.set or [])
-    except WorldError as exc:
-        print(f"skytrack inspect: {exc}", file=sys.stderr)
+    if (got := _load_or_report("inspect", args)) is None:
         return 2
-    s = map_summary(loaded, geometry)
+    s = map_summary(*got)
     if args.json:
         print(json.dumps(asdict(s), indent=2))
         return 0

@@ -325,22 +325,33 @@ class MultiTargetTracker:
         if len(held) < 2:
             return []
         p = np.array([tr.filter.x[self._ix] for tr in held])
-        out = []
-        for a, b in cKDTree(p).query_pairs(UNRESOLVED_RADIUS_M):
-            d = p[a] - p[b]
-            S = held[a].filter.P[np.ix_(self._ix, self._ix)] + held[b].filter.P[np.ix_(self._ix, self._ix)]
-            if float(d @ np.linalg.solve(S, d)) <= CHI2_2_99:
-                out.append((held[a].track_id, held[b].track_id))
-        return out
+        pairs = cKDTree(p).query_pairs(UNRESOLVED_RADIUS_M, output_type="ndarray")
+        if not len(pairs):
+            return []
+        ix = np.ix_(self._ix, self._ix)
+        P = np.array([tr.filter.P[ix] for tr in held])
+        a, b = pairs[:, 0], pairs[:, 1]
+        d, S = p[a] - p[b], P[a] + P[b]
+        det = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] * S[:, 1, 0]
+        maha = (S[:, 1, 1] * d[:, 0] ** 2 - (S[:, 0, 1] + S[:, 1, 0]) * d[:, 0] * d[:, 1]
+                + S[:, 0, 0] * d[:, 1] ** 2) / det  # dᵀ S⁻¹ d of each pair (2×2 inverse in closed form)
+        return [(held[i].track_id, held[j].track_id) for i, j in pairs[maha <= CHI2_2_99].tolist()]
 
     def _searched(self, t_meas: float, live: Sequence[Track], result: object, fixes: Sequence) -> None:
-        """The identity belief's negative information from a position-fixing scan: the ground fixes of the
-        detections no confirmed track took (unassigned ones, and those tentative tracks took)."""
-        points = [xy for _, xy, _ in fixes]
-        if result.weights is None:
-            tentative = [result.detections[j] for i, j in result.pairs if not live[i].confirmed]
-            points += [xy for _, xy, _ in self.fixer.fixes(tentative)]
-        self.identity.scanned(t_meas, points, self._unresolved(live))
+        """What a position-fixing scan tells the identity belief: the pairs of tracks it could not tell apart (with a
+        swap probability), and the ground fixes of the detections no confirmed track took (unassigned ones, and those
+        tentative tracks took; with a search detection probability). Neither is computed when its setting is 0."""
+        cfg = self.identity.config
+        if not self.identity.weights or (cfg.swap_probability <= 0 and cfg.search_detection_probability <= 0):
+            return
+        points = []
+        if cfg.search_detection_probability > 0:
+            points = [xy for _, xy, _ in fixes]
+            if result.weights is None:
+                tentative = [result.detections[j] for i, j in result.pairs if not live[i].confirmed]
+                points += [xy for _, xy, _ in self.fixer.fixes(tentative)]
+        unresolved = self._unresolved(live) if cfg.swap_probability > 0 else []
+        self.identity.scanned(t_meas, points, unresolved)
 
     def _updated(self, track: Track, det: MeasurementLike, t_meas: float) -> None:
         track.last_update_t = t_meas

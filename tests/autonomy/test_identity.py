@@ -261,3 +261,21 @@ def test_two_tracks_a_scan_could_not_tell_apart_share_their_continuity_but_keep_
     assert ident.probability(2) == pytest.approx(c[2] * math.exp(E[2]) / z, rel=1e-9)
     assert ident.probability(1) == pytest.approx(c[1] * math.exp(E[1]) / z, rel=1e-9)
     assert ident.target() == 2
+
+
+def test_unresolved_pairs_mix_at_once_whatever_their_order():
+    """Three tracks in a chain of unresolved pairs (1–2, 2–3): the result does not depend on the pairs' order, and
+    equals c_i + δ Σ_j (c_j − c_i) from the scan's parts."""
+    results = []
+    for order in ([(1, 2), (2, 3)], [(2, 3), (1, 2)]):
+        ident = TargetIdentity(_config(background_density=1e-4, swap_probability=0.1))
+        ident.cue(0.0, np.zeros(2), sigma_m=10.0)
+        for k, x in ((1, 0.0), (2, 5.0), (3, 30.0)):
+            ident.confirmed(k, 0.0, np.array([x, 0.0]), np.eye(2), evidence=0.0)
+        c = {k: ident.probability(k) for k in (1, 2, 3)}
+        ident.scanned(1.0, [], unresolved=order)
+        results.append({k: ident.probability(k) for k in (1, 2, 3)})
+    assert results[0] == pytest.approx(results[1], rel=1e-12)
+    expected = {1: c[1] + 0.1 * (c[2] - c[1]), 2: c[2] + 0.1 * (c[1] + c[3] - 2 * c[2]), 3: c[3] + 0.1 * (c[2] - c[3])}
+    for k in (1, 2, 3):  # total continuity kept, so the probabilities are the parts themselves
+        assert results[0][k] == pytest.approx(expected[k], rel=1e-9)

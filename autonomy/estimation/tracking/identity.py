@@ -286,16 +286,25 @@ class TargetIdentity:
         """One scan of the chance ``delta`` that two unresolved tracks (``unresolved``: pairs of track ids whose
         estimates the scan could not tell apart) swapped their cars: each weight is its continuity part
         ``c_k = w_k e^{−E_k}`` times its class evidence ``e^{E_k}``; the pair's continuity parts move by ``delta``
-        towards each other (``c_i, c_j ← (1 − δ) c_i + δ c_j, (1 − δ) c_j + δ c_i``), the evidence parts stay. So a
+        towards each other (``c_i ← c_i + δ Σ_j (c_j − c_i)`` over the pairs of ``i``, all pairs at once, with δ at
+        most one over the most pairs a track is in), the evidence parts stay. So a
         track that passed close to the target's while the belief was on the other is not held down for ever by that
         history, and its own class readings can take the belief; tracks that never met keep their continuity."""
         if delta <= 0.0 or not unresolved:
             return
         c = {k: w * math.exp(-self.evidence.get(k, 0.0)) for k, w in self.weights.items()}
-        for a, b in unresolved:
-            if a in c and b in c:
-                c[a], c[b] = (1.0 - delta) * c[a] + delta * c[b], (1.0 - delta) * c[b] + delta * c[a]
-        self.weights = {k: ck * math.exp(self.evidence.get(k, 0.0)) for k, ck in c.items()}
+        pairs = [(a, b) for a, b in unresolved if a in c and b in c]
+        if not pairs:
+            return
+        degree: dict[int, int] = {}
+        for a, b in pairs:
+            degree[a], degree[b] = degree.get(a, 0) + 1, degree.get(b, 0) + 1
+        delta = min(delta, 1.0 / max(degree.values()))  # every part stays non-negative
+        new = dict(c)
+        for a, b in pairs:  # all pairs at once, from the scan's parts: the order of the pairs does not matter
+            new[a] += delta * (c[b] - c[a])
+            new[b] += delta * (c[a] - c[b])
+        self.weights = {k: ck * math.exp(self.evidence.get(k, 0.0)) for k, ck in new.items()}
         self._normalise()
 
     def merged(self, kept: int, dropped: int) -> None:

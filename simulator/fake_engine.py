@@ -108,6 +108,9 @@ class ScriptedCars(_Scripted):
     def __init__(self, script: Script, physics_hz: int, log: list[tuple[str, int]] | None = None) -> None:
         super().__init__("cars", script, physics_hz, [] if log is None else log)
 
+    def sync_scene(self) -> None:
+        self.log.append(("cars.sync_scene", self.tick))
+
     @property
     def state(self) -> CarState:
         n = len(self.p_W)

@@ -4,7 +4,8 @@ phases.
 1. vehicles apply actuator forces from their controllers' last outputs;
 2. the physics steps;
 3. low-level controllers run on the new state, and the divergence watchdog (:mod:`simulator.watchdog`) checks it;
-4. sensors due at this tick measure; their detections go to their agent, to the team protocols and to the teammates
+4. sensors due at this tick measure (the cars' scene bodies first placed where the cars are: kinematic cars move their
+   bodies only when something looks); their detections go to their agent, to the team protocols and to the teammates
    that take detections;
 5. agents due at this tick: each team protocol does its team-level work (:mod:`autonomy.team.base`), then every due
    agent, in the world's order, reads its inbox, finishes its step and hands its set-point to its UAV, and its state
@@ -156,6 +157,8 @@ class Assembly:
         due = [slot for slot in self.sensors if tick % slot.divisor == 0]
         if not due:
             return
+        if self.cars is not None:
+            self.cars.sync_scene()
         truth = self.truth.targets()
         st = self.quads.state
         for slot in due:

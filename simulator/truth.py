@@ -46,10 +46,15 @@ class UavFleet(Fleet, Protocol):
 
 
 class GroundFleet(Fleet, Protocol):
-    """The cars: their state."""
+    """The cars: their state, and their scene bodies placed on demand."""
 
     @property
     def state(self) -> CarState: ...
+
+    def sync_scene(self) -> None:
+        """Place every car's scene body where the state says (bodies moved lazily are placed before a sensor
+        looks)."""
+        ...
 
 
 class Truth:

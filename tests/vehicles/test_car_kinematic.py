@@ -81,6 +81,11 @@ def test_box_is_where_the_state_says_and_rays_see_its_shape(client):
             tick += 1
         st = fleet.state
         assert st.speed.min() > 1.0  # moving
+        # the boxes move only when something looks (no UAV or physics car near them: none placed since the start)
+        for i, body in enumerate(fleet.body_ids):
+            pos, _ = p.getBasePositionAndOrientation(int(body), physicsClientId=client)
+            assert np.linalg.norm(np.array(pos) - st.p_W[i]) > 0.1
+        fleet.sync_scene()
         for i, (par, body) in enumerate(zip((SEDAN, VAN), fleet.body_ids, strict=True)):
             pos, q = p.getBasePositionAndOrientation(int(body), physicsClientId=client)
             assert np.array_equal(pos, st.p_W[i]) and np.allclose(q, st.q_WB[i], rtol=0, atol=1e-15)

@@ -1,29 +1,39 @@
 """A fleet of cars driven along roads: the run loop's view of all ground vehicles.
 
 Per tick the run loop calls ``apply_actuation()``, ``p.stepSimulation()``, ``after_step(tick)``. Actuation hands each
-driver's last :class:`~vehicles.car.driver_config.DriveCommand` to the car's dynamics (:mod:`vehicles.car.dynamics`):
-motor targets of a physics car's multibody, or one step of a kinematic car's bicycle model and the placing of its box.
-After the step the fleet reads every car's state and runs the drivers due at that tick, with the leaders found among
-all cars, so physics and kinematic cars drive in one traffic.
+physics car's driver's last :class:`~vehicles.car.driver_config.DriveCommand` to its multibody
+(:mod:`vehicles.car.dynamics`). After the step the fleet reads the physics cars' state and runs their drivers due at
+that tick; the kinematic cars step in a compiled :class:`~vehicles.car.traffic_fleet.TrafficFleet` at their drivers'
+rate, which keeps every physics tick of their bicycle models and places their boxes in the scene only when something
+looks (:meth:`CarFleet.sync_scene` before sensors and cameras, and the boxes near a UAV or a physics car before each
+physics step). Leaders are found among all cars, so physics and kinematic cars drive in one traffic.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from vehicles.car.driver import Driver
 from vehicles.car.driver_config import DriverConfig
-from vehicles.car.dynamics import make_dynamics
+from vehicles.car.dynamics import CAR_DYNAMICS, make_dynamics
 from vehicles.car.params import CarParams
 from vehicles.car.road_protocol import NetworkLike
 from vehicles.car.route import Route
 from vehicles.car.traffic import find_leaders
+from vehicles.car.traffic_fleet import TrafficFleet
+from vehicles.car.traffic_kernel import R_OMEGA, R_VFWD, R_VX, R_VY, R_X, R_Y, R_YAW, R_YAWREAD
+from vehicles.car.traffic_source import OtherCars
 
-__all__ = ["CarFleet", "CarState"]
+__all__ = ["CarFleet", "CarState", "SYNC_RADIUS"]
+
+SYNC_RADIUS = 15.0
+"""m: a kinematic car's box within this distance of a UAV or a physics car is placed before every physics step (a box
+nearer than a car length plus a UAV's size is the most a contact can involve; the rest wait for a sensor)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,6 +95,11 @@ class _Arrays:
 class CarFleet:
     """Cars, their drivers and their actuation.
 
+    Physics cars step their drivers and multibodies here, at the physics rate; kinematic cars are handed to a
+    compiled :class:`~vehicles.car.traffic_fleet.TrafficFleet` (one per driver rate) that steps them together and
+    places their boxes lazily (:meth:`sync_scene`, and before each physics step the boxes near :attr:`near_points`).
+    Car following sees every car, of either kind, both ways.
+
     Parameters
     ----------
     client_id : int
@@ -101,6 +116,12 @@ class CarFleet:
     dynamics : Sequence[str] | None
         How each car moves, a key of :data:`vehicles.car.dynamics.CAR_DYNAMICS` (``"physics"``: PyBullet multibody;
         ``"kinematic"``: kinematic bicycle carrying a box); None = all ``"physics"``.
+
+    Attributes
+    ----------
+    near_points : Callable[[], np.ndarray] | None
+        Where the run's other dynamic bodies are ((K, 2) m: the UAVs); each physics step first places the kinematic
+        cars' boxes within :data:`SYNC_RADIUS` of them or of a physics car. None: the physics cars only.
     """
 
     def __init__(self, client_id: int, params: Sequence[CarParams], drivers: Sequence[DriverConfig],
@@ -111,79 +132,142 @@ class CarFleet:
         if not (len(drivers) == n == len(routes) == len(dynamics)) or n == 0:
             raise ValueError(f"CarFleet needs one params, driver config, route and dynamics per car, got "
                              f"{len(params)}/{len(drivers)}/{len(routes)}/{len(dynamics)}")
+        for kind in dynamics:
+            if kind not in CAR_DYNAMICS:
+                raise ValueError(f"car dynamics must be one of {sorted(CAR_DYNAMICS)}, got {kind!r}")
         self.client_id, self.physics_hz, self.params = client_id, int(physics_hz), list(params)
         self._every = [cfg.ticks_per_update(physics_hz) for cfg in drivers]
         self.drivers = [Driver(config=cfg, params=par, route=rt, network=network, rng=g, physics_hz=physics_hz)
                         for cfg, par, rt, g in zip(drivers, params, routes, rng.spawn(n), strict=True)]
         spawns = [d.spawn_pose() for d in self.drivers]
         self._check_spawns(spawns)
-        self.dynamics = [make_dynamics(kind, client_id, par, xy, yaw, self.physics_hz)
-                         for kind, par, (xy, yaw) in zip(dynamics, params, spawns, strict=True)]
-        self.body_ids = np.array([d.body_id for d in self.dynamics], dtype=int)
+        self._phys = [i for i in range(n) if dynamics[i] == "physics"]
+        self.dynamics = {i: make_dynamics("physics", client_id, params[i], *spawns[i], self.physics_hz)
+                         for i in self._phys}
+        self.traffic: list[tuple[np.ndarray, TrafficFleet]] = []  # (world indices, fleet) per driver rate
+        kin = [i for i in range(n) if dynamics[i] == "kinematic"]
+        for rate in sorted({drivers[i].rate_hz for i in kin}):
+            idx = np.array([i for i in kin if drivers[i].rate_hz == rate], dtype=int)
+            fleet = TrafficFleet(client_id, [self.drivers[i] for i in idx], [params[i] for i in idx],
+                                 [f"car{i}" for i in idx], physics_hz)
+            self.traffic.append((idx, fleet))
+        body = np.zeros(n, dtype=int)
+        for i, dyn in self.dynamics.items():
+            body[i] = dyn.body_id
+        for idx, fleet in self.traffic:
+            body[idx] = fleet.body_ids
+        self.body_ids = body
         self._lengths = [par.length for par in params]
-        self._events: list[dict] = []
+        self._length_arr = np.array(self._lengths)
+        self._events: list[tuple[int, dict]] = []
         self._off_road = np.zeros(n, dtype=bool)
         self._tick = 0
+        self._phys_every = {i: self._every[i] for i in self._phys}
+        self._every_gcd = math.gcd(*self._phys_every.values()) if self._phys else 0
         self._rows: list[tuple[float, ...]] = []
         self._prev_rows: list[tuple[float, ...]] | None = None  # None: no step yet (a_W = 0)
         self._read()
         self._prev_rows = None
-        self._every_gcd = math.gcd(*self._every)
         self._cache: CarState | None = None
+        self.near_points: Callable[[], np.ndarray] | None = None
 
     def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
-        for i in range(len(spawns)):
-            for j in range(i):
-                gap = float(np.linalg.norm(spawns[i][0] - spawns[j][0]))
-                need = 0.5 * (self.params[i].length + self.params[j].length)
-                if gap < need:
-                    raise ValueError(f"CarFleet: cars {j} and {i} spawn {gap:.2f} m apart, closer than their half "
-                                     f"lengths {need:.2f} m; separate their Route.start_s")
+        xy = np.array([p for p, _ in spawns])
+        half = 0.5 * np.array([par.length for par in self.params])
+        tree = cKDTree(xy)
+        for i, j in sorted(tree.query_pairs(2 * float(half.max()))):  # every pair closer than the longest car
+            gap = float(np.linalg.norm(xy[j] - xy[i]))
+            need = half[i] + half[j]
+            if gap < need:
+                raise ValueError(f"CarFleet: cars {i} and {j} spawn {gap:.2f} m apart, closer than their half "
+                                 f"lengths {need:.2f} m; separate their Route.start_s")
 
     def _read(self) -> None:
-        """Read every car's state row; the arrays are made from the rows when first needed (:meth:`_arrays`)."""
-        self._prev_rows, self._rows = self._rows, [d.state_row() for d in self.dynamics]
+        """Read every physics car's state row; the arrays of all cars are made when first needed (:meth:`_arrays`)."""
+        self._prev_rows, self._rows = self._rows, [self.dynamics[i].state_row() for i in self._phys]
         self._arr: _Arrays | None = None
 
     def _arrays(self) -> _Arrays:
-        """The last rows as arrays, with the heading and forward speed of each car and its acceleration, the finite
-        difference of v_W over the last physics step."""
+        """Every car's reading at the last tick as arrays, with the heading and forward speed of each car and its
+        acceleration, the finite difference of v_W over the last physics step."""
         if self._arr is None:
-            rows = self._rows
-            x = np.array(rows)
-            # heading and forward speed per car in scalar math: a handful of cars
-            yaw = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
-            speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
-            v_W = x[:, 7:10]
-            a_W = (np.zeros_like(v_W) if self._prev_rows is None
-                   else (v_W - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz)
-            self._arr = _Arrays(p_W=x[:, 0:3], q_WB=x[:, 3:7], v_W=v_W, omega_z=x[:, 12], a_W=a_W,
-                                yaw=np.array(yaw), speed=speed)
+            n, tick = len(self.drivers), self._tick
+            p_W, q_WB, v_W, a_W = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 3)), np.zeros((n, 3))
+            omega, yaw, speed = np.zeros(n), np.zeros(n), np.zeros(n)
+            if self._phys:
+                rows, idx = self._rows, self._phys
+                x = np.array(rows)
+                # heading and forward speed per car in scalar math: a handful of cars
+                h = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
+                speed[idx] = [r[7] * math.cos(hh) + r[8] * math.sin(hh) for r, hh in zip(rows, h, strict=True)]
+                p_W[idx], q_WB[idx], v_W[idx], omega[idx], yaw[idx] = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12], h
+                if self._prev_rows is not None:
+                    a_W[idx] = (x[:, 7:10] - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz
+            for idx, fleet in self.traffic:
+                now, prev = fleet.readings(tick)
+                p_W[idx, 0], p_W[idx, 1], p_W[idx, 2] = now[:, R_X], now[:, R_Y], fleet.ground_z
+                half = 0.5 * now[:, R_YAW]
+                q_WB[idx, 2], q_WB[idx, 3] = np.sin(half), np.cos(half)
+                v_W[idx, 0], v_W[idx, 1] = now[:, R_VX], now[:, R_VY]
+                omega[idx], yaw[idx], speed[idx] = now[:, R_OMEGA], now[:, R_YAWREAD], now[:, R_VFWD]
+                if prev is not None:
+                    a_W[idx, 0] = (now[:, R_VX] - prev[:, R_VX]) * self.physics_hz
+                    a_W[idx, 1] = (now[:, R_VY] - prev[:, R_VY]) * self.physics_hz
+            self._arr = _Arrays(p_W=p_W, q_WB=q_WB, v_W=v_W, omega_z=omega, a_W=a_W, yaw=yaw, speed=speed)
         return self._arr
 
     def apply_actuation(self) -> None:
-        """Run-loop phase 1: each car's dynamics acts on its driver's last command."""
-        for drv, dyn in zip(self.drivers, self.dynamics, strict=True):
-            dyn.actuate(drv.command)
+        """Run-loop phase 1: each physics car's dynamics acts on its driver's last command; the kinematic cars' boxes
+        near a dynamic body (:attr:`near_points`, the physics cars) move to their pose of the coming tick."""
+        for i, dyn in self.dynamics.items():
+            dyn.actuate(self.drivers[i].command)
+        if self.traffic:
+            pts = [self._arrays().p_W[self._phys, :2]] if self._phys else []
+            if self.near_points is not None:
+                pts.append(np.asarray(self.near_points(), dtype=float).reshape(-1, 2)[:, :2])
+            if pts:
+                near = np.vstack(pts)
+                for _, fleet in self.traffic:
+                    fleet.sync_near(self._tick + 1, near, SYNC_RADIUS)
+
+    def sync_scene(self) -> None:
+        """Place every kinematic car's box at its pose of the last tick (before sensors or cameras look)."""
+        for _, fleet in self.traffic:
+            fleet.sync_scene(self._tick)
 
     def after_step(self, tick: int) -> None:
         """After ``p.stepSimulation()``: read the cars' state and run the drivers due at ``tick``."""
         self._read()
         self._tick = tick
         self._cache = None
-        if tick % self._every_gcd:
-            return
-        due = [i for i, e in enumerate(self._every) if tick % e == 0]
-        if not due:
-            return
-        x = self._arrays()
-        leaders = find_leaders(self.drivers, x.p_W[:, :2], x.yaw, x.speed, self._lengths)
-        for i in due:
-            drv = self.drivers[i]
-            drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i], float(x.omega_z[i]))
-            self.dynamics[i].on_driver_update(float(x.speed[i]))
-            self._events += [dict(e, car=i) for e in drv.pop_events()]
-            self._check_road(i, tick)
+        if self.traffic:
+            others = None
+            for idx, fleet in self.traffic:
+                if tick % fleet.every == 0:
+                    if others is None:
+                        others = self._others()
+                    fleet.advance(tick, others)
+                    self._events += [(int(idx[e["car"]]), dict(e, car=int(idx[e["car"]])))
+                                     for e in fleet.pop_events()]
+        if self._phys and tick % self._every_gcd == 0:
+            due = [i for i in self._phys if tick % self._every[i] == 0]
+            if due:
+                x = self._arrays()
+                leaders = find_leaders(self.drivers, x.p_W[:, :2], x.yaw, x.speed, self._lengths, followers=due)
+                for i in due:
+                    drv = self.drivers[i]
+                    drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i],
+                               float(x.omega_z[i]))
+                    self.dynamics[i].on_driver_update(float(x.speed[i]))
+                    self._events += [(i, dict(e, car=i)) for e in drv.pop_events()]
+                    self._check_road(i, tick)
+
+    def _others(self) -> OtherCars:
+        """The physics cars at the last tick, as a traffic fleet's leader search sees them."""
+        if not self._phys:
+            return OtherCars.none()
+        x, idx = self._arrays(), self._phys
+        return OtherCars(xy=x.p_W[idx, :2], yaw=x.yaw[idx], speed=x.speed[idx], length=self._length_arr[idx])
 
     def _check_road(self, i: int, tick: int) -> None:
         """Events when a car's centre leaves the street (|lateral| > lanes x lane_width) or comes back."""
@@ -193,27 +277,36 @@ class CarFleet:
         off = abs(lateral) > road.lanes * road.lane_width
         if off != self._off_road[i]:
             self._off_road[i] = off
-            self._events.append({"type": "car_left_road" if off else "car_back_on_road", "car": i, "tick": tick,
-                                 "road": road_id, "s": s, "lateral": lateral})
+            self._events.append((i, {"type": "car_left_road" if off else "car_back_on_road", "car": i, "tick": tick,
+                                     "road": road_id, "s": s, "lateral": lateral}))
 
     @property
     def state(self) -> CarState:
         """Ground truth after the last ``after_step``."""
         if self._cache is None:
             x = self._arrays()
-            located = [d.locate(x.p_W[i, :2]) for i, d in enumerate(self.drivers)]
+            n = len(self.drivers)
+            road_id, s, lateral = [""] * n, np.zeros(n), np.zeros(n)
+            stopped = np.array([d.stopped for d in self.drivers])
+            for i in self._phys:
+                road_id[i], s[i], lateral[i] = self.drivers[i].locate(x.p_W[i, :2])
+            for idx, fleet in self.traffic:
+                ids, s_f, lat_f, _ = fleet.road_positions(self._tick)
+                for i, rid in zip(idx, ids, strict=True):
+                    road_id[i] = rid
+                s[idx], lateral[idx] = s_f, lat_f
             self._cache = CarState(
                 tick=self._tick, p_W=x.p_W.copy(), q_WB=x.q_WB.copy(), v_W=x.v_W.copy(), a_W=x.a_W.copy(),
-                yaw=x.yaw.copy(), speed=x.speed.copy(),
-                road_id=[r[0] for r in located], s=np.array([r[1] for r in located]),
-                lateral=np.array([r[2] for r in located]), stopped=np.array([d.stopped for d in self.drivers]))
+                yaw=x.yaw.copy(), speed=x.speed.copy(), road_id=road_id, s=s, lateral=lateral, stopped=stopped)
         return self._cache
 
     def pop_events(self) -> list[dict]:
-        """Events since the last call: ``car_stop``, ``car_go``, ``car_enter_road``, ``car_route_end``,
-        ``car_left_road``, ``car_back_on_road``; each has ``type``, ``car`` (index) and ``tick``."""
+        """Events since the last call, in the order of the ticks and, within a tick, of the cars: ``car_stop``,
+        ``car_go``, ``car_enter_road``, ``car_route_end``, ``car_left_road``, ``car_back_on_road``; each has ``type``,
+        ``car`` (index) and ``tick``."""
         ev, self._events = self._events, []
-        return ev
+        ev.sort(key=lambda ie: (ie[1]["tick"], ie[0]))  # stable: a car's own events keep their order
+        return [e for _, e in ev]
 
     def __len__(self) -> int:
         return len(self.drivers)

@@ -1,0 +1,164 @@
+"""The compiled traffic fleet: the Python drivers' trajectories to the last bit, car following across physics and
+kinematic cars both ways, and boxes where the cars are whenever a sensor looks."""
+
+import math
+
+import numpy as np
+import pybullet as p
+import pytest
+
+from car_fixtures import bullet_client, grid_network
+from vehicles.car.driver import Driver
+from vehicles.car.driver_config import DriverConfig
+from vehicles.car.dynamics import KinematicDynamics
+from vehicles.car.fleet import CarFleet
+from vehicles.car.params import load_car
+from vehicles.car.route import Route
+from vehicles.car.traffic import find_leaders
+from vehicles.car.traffic_fleet import TrafficFleet
+from vehicles.car.traffic_kernel import R_VFWD, R_X, R_Y, R_YAWREAD
+from vehicles.car.traffic_source import OtherCars
+
+SEDAN, VAN = load_car("sedan"), load_car("van")
+
+
+@pytest.fixture
+def client():
+    c = bullet_client(240)
+    yield c
+    p.disconnect(c)
+
+
+def _reference(client, drivers, params, seconds, physics_hz=240):
+    """The Python drivers and kinematic bicycles stepped every physics tick, as the car fleet stepped kinematic cars
+    before the compiled fleet: per tick (x, y, heading read from the quaternion, forward speed) and the events."""
+    dyn = [KinematicDynamics(client, par, *d.spawn_pose(), physics_hz) for d, par in zip(drivers, params, strict=True)]
+    every = drivers[0].config.ticks_per_update(physics_hz)
+    lengths = [par.length for par in params]
+    out, events = [], []
+    for tick in range(1, int(seconds * physics_hz) + 1):
+        for d, car in zip(drivers, dyn, strict=True):
+            car.actuate(d.command)
+        rows = [car.state_row() for car in dyn]
+        yaw = np.array([math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows])
+        speed = np.array([r[7] * math.cos(h) + r[8] * math.sin(h) for r, h in zip(rows, yaw, strict=True)])
+        xy = np.array([r[0:2] for r in rows])
+        if tick % every == 0:
+            leaders = find_leaders(drivers, xy, yaw, speed, lengths)
+            for i, d in enumerate(drivers):
+                d.update(xy[i], float(yaw[i]), float(speed[i]), tick, leaders[i], rows[i][12])
+                events += [dict(e, car=i) for e in d.pop_events()]
+        out.append(np.column_stack([xy, yaw, speed]))
+    return np.array(out), events
+
+
+def _drivers(net, n, seed, cfg):
+    params = [SEDAN if i % 3 else VAN for i in range(n)]
+    roads = list(net.roads)
+    routes = [Route(random_walk=True, start_road=roads[(5 * i) % len(roads)], start_s=10.0 + 15.0 * (i % 3))
+              for i in range(n)]
+    gens = np.random.default_rng(seed).spawn(n)
+    return [Driver(config=cfg, params=par, route=rt, network=net, rng=g) for par, rt, g in
+            zip(params, routes, gens, strict=True)], params
+
+
+@pytest.mark.parametrize("rate_hz", [40, 20])
+def test_compiled_fleet_drives_the_python_drivers_trajectories_to_the_last_bit(client, rate_hz):
+    """14 cars on random walks over a 4 x 4 grid for 40 s: stops, dwells, turns, cruise changes and car following.
+    Every physics tick's position, heading and speed equal the Python drivers' bit for bit, the events too; most
+    driver steps run compiled."""
+    net = grid_network(4, 100.0)
+    cfg = DriverConfig(rate_hz=rate_hz, cruise_change_period=8.0)
+    n, seconds = 14, 40.0
+    ref_drivers, params = _drivers(net, n, 7, cfg)
+    ref, ref_events = _reference(client, ref_drivers, params, seconds)
+    drivers, _ = _drivers(net, n, 7, cfg)
+    fleet = TrafficFleet(client, drivers, params, [f"t{i}" for i in range(n)], 240)
+    events = []
+    for tick in range(1, int(seconds * 240) + 1):
+        fleet.advance(tick, OtherCars.none())
+        events += fleet.pop_events()
+        now, _ = fleet.readings(tick)
+        got = np.column_stack([now[:, R_X], now[:, R_Y], now[:, R_YAWREAD], now[:, R_VFWD]])
+        assert np.array_equal(got, ref[tick - 1]), f"tick {tick}: max diff {np.abs(got - ref[tick - 1]).max()}"
+    assert [e["type"] for e in ref_events].count("car_stop") >= 10  # the walk exercised the rare steps
+    key = lambda e: (e["tick"], e["car"], e["type"])  # noqa: E731 - the order within a tick is per car
+    assert sorted(events, key=key) == sorted(ref_events, key=key)
+    assert fleet.compiled_steps > 10 * fleet.python_steps
+    # the run left some cars following others: the leader search was exercised, not only free driving
+    assert any(d.command.accel < 0 for d in ref_drivers) or ref[-1, :, 3].min() < 1.0
+
+
+def _queue_fleet(client, dynamics):
+    """Two cars on one straight road, the front one stopping for 30 s at the junction 1_0; 20 m behind, the other."""
+    net = grid_network(3, 120.0)
+    front = Route(roads=("h0_0.f", "h1_0.f"), start_s=30.0, stops=("1_0",))
+    back = Route(roads=("h0_0.f", "h1_0.f"), start_s=5.0, stops=())
+    cfg = DriverConfig(cruise_fraction_range=(1.0, 1.0), cruise_change_period=0.0, dwell_range=(30.0, 30.0))
+    return CarFleet(client, [SEDAN, SEDAN], [cfg, cfg], [front, back], net, 240, np.random.default_rng(1),
+                    dynamics=dynamics)
+
+
+@pytest.mark.parametrize("dynamics", [("physics", "kinematic"), ("kinematic", "physics")])
+def test_car_following_sees_physics_and_kinematic_cars_both_ways(client, dynamics):
+    """A car behind a car stopped at a junction stops behind it at the IDM+ standstill gap (s0 = 2 m), whichever of
+    the two is the physics car and which the compiled kinematic one."""
+    fleet = _queue_fleet(client, list(dynamics))
+    for tick in range(1, 240 * 25 + 1):
+        fleet.apply_actuation()
+        p.stepSimulation(physicsClientId=client)
+        fleet.after_step(tick)
+    st = fleet.state
+    assert st.stopped[0] and abs(st.speed[1]) < 0.05
+    gap = float(np.linalg.norm(st.p_W[0, :2] - st.p_W[1, :2])) - SEDAN.length
+    assert 1.0 < gap < 3.5  # s0 = 2 m; without car following the back car would have driven through the front one
+
+
+def test_boxes_are_where_the_cars_are_whenever_a_sensor_looks(monkeypatch, tmp_path):
+    """road_standoff_traffic, 6 s: at every radar scan each car's box (the body the radar's truth names) is exactly
+    where the ground truth puts the car; between scans most boxes are left where they were (placed lazily)."""
+    from autonomy.sensing.radar import Radar
+    from simulator.api import run
+
+    seen = {"scans": 0, "stale_between": 0}
+    original = Radar.measure
+
+    def checked(self, t, pose, truth, scene, rng):
+        cars = [k for k, kind in enumerate(truth.kind) if kind == "car"]
+        for k in cars:
+            pos, q = p.getBasePositionAndOrientation(int(truth.seg_ids[k]), physicsClientId=scene.client_id)
+            assert np.array_equal(pos, truth.p_W[k]), f"car {k} box at {pos}, the car at {truth.p_W[k]} (t={t})"
+            assert math.isclose(2 * math.atan2(q[2], q[3]), truth.yaw[k], abs_tol=1e-9) or abs(
+                abs(2 * math.atan2(q[2], q[3]) - truth.yaw[k]) - 2 * math.pi) < 1e-9
+        seen["scans"] += 1
+        return original(self, t, pose, truth, scene, rng)
+
+    from vehicles.car.traffic_fleet import TrafficFleet as Fleet
+    advance = Fleet.advance
+
+    def counting(self, tick, others):
+        if tick % 240 == 120:  # half-way between two radar scans (2 Hz): boxes left where the last scan put them
+            rows = self._rows(tick)
+            seen["stale_between"] += int(np.sum(np.hypot(rows[:, R_X] - self._box_xy[:, 0],
+                                                         rows[:, R_Y] - self._box_xy[:, 1]) > 0.5))
+        advance(self, tick, others)
+
+    monkeypatch.setattr(Radar, "measure", checked)
+    monkeypatch.setattr(Fleet, "advance", counting)
+    res = run("road_standoff_traffic", duration=6.0, seed=2, out_dir=tmp_path / "run")
+    assert res.status == "completed"
+    assert seen["scans"] >= 2 * 2 * 6 - 2  # two radars at 2 Hz
+    assert seen["stale_between"] > 10  # moving cars' boxes lag between scans: the scans' exactness is the sync's
+
+
+def test_a_fleet_refuses_mixed_rates_and_an_out_of_period_tick(client):
+    net = grid_network(3, 120.0)
+    d40, par = _drivers(net, 1, 0, DriverConfig(rate_hz=40))
+    d20, _ = _drivers(net, 1, 1, DriverConfig(rate_hz=20))
+    with pytest.raises(ValueError, match=r"one rate; the drivers ask for \[20, 40\] Hz"):
+        TrafficFleet(client, d40 + d20, par * 2, ["a", "b"], 240)
+    fleet = TrafficFleet(client, d40, par, ["a"], 240)
+    with pytest.raises(ValueError, match=r"tick 7 is outside the fleet's period \[0, 6\]"):
+        fleet.poses(7)
+    with pytest.raises(RuntimeError, match="tick 12 is not the fleet's next step"):
+        fleet.advance(12, OtherCars.none())

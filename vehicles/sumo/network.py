@@ -168,8 +168,8 @@ def build_sumo_net(network: RoadNetwork, work_dir: str | Path, config: NetConfig
     """
     config = config or NetConfig()
     nodes_xml, edges_xml, _, road_ids = plain_xml(network, config)
-    args = ["--offset.disable-normalization", "true", "--no-turnarounds", str(config.no_turnarounds).lower(),
-            "--no-turnarounds.except-deadend", "true", "--tls.guess", str(config.tls == "guess").lower(),
+    turn = ["--no-turnarounds.except-deadend", "true"] if config.no_turnarounds else []
+    args = ["--offset.disable-normalization", "true", *turn, "--tls.guess", str(config.tls == "guess").lower(),
             "--junctions.corner-detail", "5", "--no-warnings", "true"]
     digest = hashlib.sha256("\n".join([nodes_xml, edges_xml, *args]).encode()).hexdigest()[:16]
     work = Path(work_dir)

@@ -195,6 +195,32 @@ def test_physics_car_stopped_in_lane_stops_the_traffic_behind(client, work_dir) 
 
 
 @needs_sumo
+def test_physics_cars_are_remote_controlled_copies_that_come_and_go(client, work_dir) -> None:
+    net = RoadNetwork.from_spec({"nodes": {"a": [0, 0], "b": [1000, 0]},
+                                 "streets": [{"id": "s", "nodes": ["a", "b"]}]})
+    with _traffic(net, client, work_dir, seed=4, n_vehicles=2, n_slots=2) as tr:
+        lib = tr._lib
+        for tick in range(1, 5 * PERIOD + 1):
+            x = 100.0 + 10.0 * tick / PHYSICS_HZ  # 10 m/s along s.f's lane, and a second car parked on s.r's
+            cars = OtherCars(xy=np.array([[x, -1.75], [300.0, 1.75]]), yaw=np.array([0.0, np.pi]),
+                             speed=np.array([10.0, 0.0]), length=np.array([4.77, 6.0]))
+            tr.advance(tick, cars)
+        ids = sorted(v for v in lib.vehicle.getIDList() if v.startswith("skytrack_physics_"))
+        assert ids == ["skytrack_physics_0", "skytrack_physics_1"]
+        # at SUMO's time for tick 6 * PERIOD: the front bumper where the car will be then, at its speed
+        x_next = 100.0 + 10.0 * 6 * PERIOD / PHYSICS_HZ + 0.5 * 4.77
+        assert lib.vehicle.getPosition("skytrack_physics_0") == pytest.approx((x_next, -1.75), abs=1e-6)
+        assert lib.vehicle.getSpeed("skytrack_physics_0") == pytest.approx(10.0, abs=1e-6)
+        assert lib.vehicle.getRoadID("skytrack_physics_1") == "s.r"
+        assert lib.vehicle.getLength("skytrack_physics_1") == 6.0
+        assert not any(vid.startswith("skytrack_physics_") for vid in tr._slots.vehicle)  # never a slot
+        tr.advance(6 * PERIOD, OtherCars(xy=cars.xy[:1], yaw=cars.yaw[:1], speed=cars.speed[:1],
+                                         length=cars.length[:1]))
+        assert sorted(v for v in lib.vehicle.getIDList() if v.startswith("skytrack_physics_")) == [
+            "skytrack_physics_0"]
+
+
+@needs_sumo
 def test_one_simulation_per_process(client, work_dir) -> None:
     net = _grid(3)
     tr = _traffic(net, client, work_dir, n_vehicles=2, n_slots=2)

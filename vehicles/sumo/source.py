@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
-from vehicles.car.box_body import CarBoxBody, yaw_quaternion
+from vehicles.car.box_body import CarBoxBody
 from vehicles.car.params import CarParams, load_car
 from vehicles.car.traffic_source import OtherCars, TrafficPoses
 from vehicles.sumo._runtime import import_libsumo
@@ -44,6 +44,7 @@ _TRAFFIC_TYPE = "skytrack_traffic"
 _PHYSICS_TYPE = "skytrack_physics"
 _PHYSICS_PREFIX = "skytrack_physics_"
 _STOPPED_SPEED = 0.1  # m/s; a slot slower than this is reported stopped
+_NO_STATE = {0x42: (0.0, 0.0), 0x43: 0.0, 0x40: 0.0, 0x50: ""}  # a vehicle SUMO has no state for (teleporting)
 _active: SumoTraffic | None = None  # the one libsumo simulation of this process
 
 
@@ -156,7 +157,9 @@ class SumoTraffic:
         self._park_all()
         self._slots = SlotStates(n)
         self._events: list[dict] = []
-        self._physics: list[str] = []
+        self._physics: list[str] = []  # SUMO ids of the physics cars' copies, by index in OtherCars
+        self._physics_live: set[str] = set()  # those SUMO has now
+        self._physics_routes = 0
         self._pose_cache: TrafficPoses | None = None
         self._closed = False
         self._start(seed)
@@ -204,6 +207,7 @@ class SumoTraffic:
         self._t_prev, self._t_next = self._t_next, self._t_next + period
         arrived = 0
         for vid in lib.simulation.getArrivedIDList():
+            self._physics_live.discard(vid)
             k = slots.release(vid)
             if k is not None:
                 self._events.append({"type": "traffic_arrive", "car": k, "slot": k, "tick": self._t_next,
@@ -223,50 +227,58 @@ class SumoTraffic:
         self._pose_cache = None
 
     def _read_states(self) -> None:
+        """Every occupied slot's state at the step just taken, from the vehicles' subscriptions (plain lists: this
+        runs for every vehicle at every SUMO step)."""
         res = self._lib.vehicle.getAllSubscriptionResults()
         slots = self._slots
-        occupied = [(k, v) for k, v in enumerate(slots.vehicle) if v is not None]
-        ks = np.array([k for k, _ in occupied], dtype=np.int64)
-        m = len(occupied)
-        front, ang, speed = np.zeros((m, 2)), np.zeros(m), np.zeros(m)
-        on = np.zeros(m, dtype=bool)
-        roads = [""] * m
-        for i, (_, vid) in enumerate(occupied):
-            r = res.get(vid)
-            if r is None:
-                continue
-            front[i] = r[0x42][:2]
-            ang[i], speed[i], roads[i] = r[0x43], r[0x40], r[0x50]
-            on[i] = bool(roads[i])
-        yaw = np.arctan2(np.cos(np.radians(ang)), np.sin(np.radians(ang)))  # pi/2 - angle, wrapped
-        half = 0.5 * self.lengths[ks]
+        ks = [k for k, v in enumerate(slots.vehicle) if v is not None]
+        rows = [res.get(slots.vehicle[k]) or _NO_STATE for k in ks]
+        roads = [r[0x50] for r in rows]
+        front = np.array([r[0x42] for r in rows], dtype=float).reshape(-1, 2)
+        ang = np.radians(np.array([r[0x43] for r in rows], dtype=float))
+        speed = np.array([r[0x40] for r in rows], dtype=float)
+        on = np.array([bool(r) for r in roads], dtype=bool)
+        yaw = np.arctan2(np.cos(ang), np.sin(ang))  # pi/2 - angle, wrapped
+        idx = np.array(ks, dtype=np.int64)
+        half = 0.5 * self.lengths[idx]
         xy = front - half[:, None] * np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-        slots.end_step(ks, xy, yaw, speed, on, roads)
+        slots.end_step(idx, xy, yaw, speed, on, roads)
 
     def _place_physics(self, others: OtherCars) -> None:
-        """Insert (first time) and move SUMO's copies of the physics cars to their predicted pose at the next step."""
+        """Move SUMO's copies of the physics cars to their predicted pose at the next step, inserting a copy first
+        where there is none yet (the first time, or after SUMO let it arrive)."""
         lib = self._lib
         m = len(others.speed)
         while len(self._physics) > m:
-            lib.vehicle.remove(self._physics.pop())
+            vid = self._physics.pop()
+            if vid in self._physics_live:
+                self._physics_live.discard(vid)
+                lib.vehicle.remove(vid)
         dt = self.config.period / self.config.physics_hz
         for i in range(m):
             yaw, length = float(others.yaw[i]), float(others.length[i])
-            c, s = math.cos(yaw), math.sin(yaw)
-            x = float(others.xy[i, 0]) + (others.speed[i] * dt + 0.5 * length) * c
-            y = float(others.xy[i, 1]) + (others.speed[i] * dt + 0.5 * length) * s
-            angle = math.degrees(0.5 * math.pi - yaw) % 360.0
+            ahead = float(others.speed[i]) * dt + 0.5 * length  # centre of mass now -> front bumper at the next step
+            x = float(others.xy[i, 0]) + ahead * math.cos(yaw)
+            y = float(others.xy[i, 1]) + ahead * math.sin(yaw)
             if i == len(self._physics):
-                vid = f"{_PHYSICS_PREFIX}{i}"
-                road, _, _ = self.network.nearest(others.xy[i])
-                edge = self.net.road_to_edge[road]
-                lib.route.add(f"{vid}_route", [edge])
-                lib.vehicle.add(vid, f"{vid}_route", typeID=_PHYSICS_TYPE, depart="now")
-                lib.vehicle.setLength(vid, length)
-                lib.vehicle.setSpeedMode(vid, 0)
-                lib.vehicle.setLaneChangeMode(vid, 0)
-                self._physics.append(vid)
-            lib.vehicle.moveToXY(self._physics[i], "", -1, x, y, angle=angle, keepRoute=2)
+                self._physics.append(f"{_PHYSICS_PREFIX}{i}")
+            vid = self._physics[i]
+            if vid not in self._physics_live:
+                self._insert_physics(vid, others.xy[i], length)
+            lib.vehicle.moveToXY(vid, "", -1, x, y, angle=math.degrees(0.5 * math.pi - yaw) % 360.0, keepRoute=2)
+
+    def _insert_physics(self, vid: str, xy: np.ndarray, length: float) -> None:
+        """Add a physics car's copy on the edge of the skytrack road nearest to it (moveToXY then places it)."""
+        lib = self._lib
+        road, _, _ = self.network.nearest(xy)
+        route = f"{vid}_route{self._physics_routes}"
+        self._physics_routes += 1
+        lib.route.add(route, [self.net.road_to_edge[road]])
+        lib.vehicle.add(vid, route, typeID=_PHYSICS_TYPE, depart="now")
+        lib.vehicle.setLength(vid, length)
+        lib.vehicle.setSpeedMode(vid, 0)
+        lib.vehicle.setLaneChangeMode(vid, 0)
+        self._physics_live.add(vid)
 
     # ------------------------------------------------------------------ the traffic source protocol
     def advance(self, tick: int, others: OtherCars) -> None:
@@ -306,14 +318,20 @@ class SumoTraffic:
 
     def _sync(self, tick: int, want: np.ndarray) -> None:
         ps = self.poses(tick)
-        cid, z = self.client_id, self.config.park_z
-        for k in np.flatnonzero(want & ps.active & (self._placed != tick)):
-            self._bodies[k].place(float(ps.xy[k, 0]), float(ps.xy[k, 1]), yaw_quaternion(float(ps.yaw[k])))
-            self._placed[k] = tick
-        for k in np.flatnonzero(~ps.active & (self._placed >= 0)):
-            p.resetBasePositionAndOrientation(int(self.body_ids[k]), (*self._park_xy[k], z), (0, 0, 0, 1),
-                                              physicsClientId=cid)
-            self._placed[k] = -1
+        cid, z, reset = self.client_id, self.config.park_z, p.resetBasePositionAndOrientation
+        place = np.flatnonzero(want & ps.active & (self._placed != tick))
+        if len(place):
+            bodies, zs = self.body_ids[place].tolist(), self.ground_z[place].tolist()
+            xs, ys = ps.xy[place, 0].tolist(), ps.xy[place, 1].tolist()
+            half = 0.5 * ps.yaw[place]
+            qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
+            for b, x, y, bz, sz, cw in zip(bodies, xs, ys, zs, qz, qw, strict=True):
+                reset(b, (x, y, bz), (0.0, 0.0, sz, cw), physicsClientId=cid)
+            self._placed[place] = tick
+        park = np.flatnonzero(~ps.active & (self._placed >= 0))
+        for k in park.tolist():
+            reset(int(self.body_ids[k]), (*self._park_xy[k], z), (0.0, 0.0, 0.0, 1.0), physicsClientId=cid)
+        self._placed[park] = -1
 
     def _park_all(self) -> None:
         for k, b in enumerate(self._bodies):

@@ -1,0 +1,125 @@
+"""Slots of a co-simulated traffic source: which vehicle each holds, its state at two steps, poses in between.
+
+The source's simulator steps at ticks ``t_prev`` and ``t_next = t_prev + period``; a slot holds the state of its
+vehicle at both. At a physics tick ``t`` in ``[t_prev, t_next)`` with ``alpha = (t - t_prev) / period``:
+
+- a vehicle on the road at both steps is interpolated linearly, position and speed, and its heading along the
+  shorter arc: ``x(t) = (1 - alpha) x_prev + alpha x_next``, ``yaw(t) = yaw_prev + alpha wrap(yaw_next - yaw_prev)``,
+  yaw rate ``wrap(yaw_next - yaw_prev) / (period dt)``;
+- a vehicle that arrives (or leaves the road) during the step stays where it was at ``t_prev`` until ``t_next``;
+- a vehicle that departs during the step is inactive until ``t_next``;
+
+and at ``t = t_next`` every slot is its state at ``t_next``. So a slot changes vehicle only at a step, never blends
+two vehicles, and the poses at ``t_next`` are the same before and after the step from ``t_next`` is taken.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+
+from vehicles.car.traffic_source import TrafficPoses
+
+__all__ = ["SlotStates"]
+
+
+class SlotStates:
+    """N slots: the vehicle each holds and its state at the last two steps (see the module docstring).
+
+    Parameters
+    ----------
+    n : int
+        Number of slots.
+    """
+
+    def __init__(self, n: int) -> None:
+        if n < 1:
+            raise ValueError(f"SlotStates: n must be >= 1, got {n}")
+        self.n = n
+        self.vehicle: list[str | None] = [None] * n
+        self._slot_of: dict[str, int] = {}
+        self._free = list(range(n))  # a heap: the lowest free slot is taken first, so slot order is reproducible
+        self._prev_vehicle: list[str | None] = [None] * n
+        self.xy = np.zeros((2, n, 2))  # [prev, next]
+        self.yaw = np.zeros((2, n))
+        self.speed = np.zeros((2, n))
+        self.on = np.zeros((2, n), dtype=bool)
+        self.road = [[""] * n, [""] * n]
+        self._same = np.zeros(n, dtype=bool)
+
+    # ------------------------------------------------------------------ vehicles in and out
+    def slot_of(self, vehicle_id: str) -> int | None:
+        """Slot holding ``vehicle_id``, or None."""
+        return self._slot_of.get(vehicle_id)
+
+    def take(self, vehicle_id: str) -> int:
+        """Give ``vehicle_id`` the lowest free slot; RuntimeError when all are taken."""
+        if not self._free:
+            raise RuntimeError(f"all {self.n} traffic slots are taken: vehicle {vehicle_id!r} has none; give the "
+                               f"source more slots than vehicles on the road")
+        k = heapq.heappop(self._free)
+        self.vehicle[k] = vehicle_id
+        self._slot_of[vehicle_id] = k
+        return k
+
+    def release(self, vehicle_id: str) -> int | None:
+        """Free the slot of ``vehicle_id`` (its state at the next step becomes off the road); its index or None."""
+        k = self._slot_of.pop(vehicle_id, None)
+        if k is not None:
+            self.vehicle[k] = None
+            self.on[1, k] = False
+            self.road[1][k] = ""
+            heapq.heappush(self._free, k)
+        return k
+
+    # ------------------------------------------------------------------ steps
+    def begin_step(self) -> None:
+        """The state at the next step becomes the previous one (call before the simulator steps)."""
+        self._prev_vehicle = list(self.vehicle)
+        self.xy[0], self.yaw[0], self.speed[0], self.on[0] = self.xy[1], self.yaw[1], self.speed[1], self.on[1]
+        self.road[0] = list(self.road[1])
+
+    def end_step(self, slots: np.ndarray, xy: np.ndarray, yaw: np.ndarray, speed: np.ndarray, on: np.ndarray,
+                 road: list[str]) -> None:
+        """States at the new step of the vehicles in ``slots`` (every occupied slot; the others are off the road)."""
+        self.on[1] = False
+        self.on[1, slots] = on
+        self.xy[1, slots], self.yaw[1, slots], self.speed[1, slots] = xy, yaw, speed
+        nxt = [""] * self.n
+        for k, r in zip(slots.tolist(), road, strict=True):
+            nxt[k] = r
+        self.road[1] = nxt
+        pairs = zip(self._prev_vehicle, self.vehicle, strict=True)
+        same = np.array([a is not None and a == b for a, b in pairs], dtype=bool)
+        self._same = same & self.on[0] & self.on[1]
+
+    # ------------------------------------------------------------------ poses
+    def poses(self, tick: int, alpha: float, step_dt: float) -> TrafficPoses:
+        """Poses at ``tick``, a fraction ``alpha`` in [0, 1] of the way from the previous step to the next one
+        (``step_dt``: the step length, s)."""
+        if alpha >= 1.0:
+            xy, yaw, speed, on = self.xy[1].copy(), self.yaw[1].copy(), self.speed[1].copy(), self.on[1].copy()
+            yaw_rate = np.where(self._same, self._dyaw(), 0.0) / step_dt
+        else:
+            same = self._same
+            dyaw = self._dyaw()
+            a = np.where(same, alpha, 0.0)
+            xy = self.xy[0] + a[:, None] * (self.xy[1] - self.xy[0])
+            yaw = self.yaw[0] + a * dyaw
+            speed = self.speed[0] + a * (self.speed[1] - self.speed[0])
+            on = self.on[0].copy()
+            yaw_rate = np.where(same, dyaw, 0.0) / step_dt
+        yaw = np.arctan2(np.sin(yaw), np.cos(yaw))
+        speed = np.where(on, speed, 0.0)
+        v_xy = speed[:, None] * np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+        return TrafficPoses(tick=tick, xy=xy, yaw=yaw, speed=speed, v_xy=v_xy, yaw_rate=np.where(on, yaw_rate, 0.0),
+                            active=on)
+
+    def roads_at(self, alpha: float) -> list[str]:
+        """SUMO edge of each slot at the step nearer to ``alpha`` (``""`` off the road)."""
+        return list(self.road[1] if alpha >= 0.5 else self.road[0])
+
+    def _dyaw(self) -> np.ndarray:
+        d = self.yaw[1] - self.yaw[0]
+        return np.arctan2(np.sin(d), np.cos(d))

@@ -57,14 +57,21 @@ def fleet_options(world: World) -> Any:
 
 
 def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
-    """The ground vehicles, their drivers, routes and dynamics (physics multibody or kinematic box)."""
+    """The ground vehicles, their drivers, routes and dynamics (physics multibody or kinematic box), and SUMO's
+    slots when the world's traffic engine is SUMO (the last ``traffic.cars`` entries, added by
+    :func:`worlds.traffic.with_traffic`)."""
     from vehicles.car.driver_config import DriverConfig
     from vehicles.car.fleet import CarFleet
     from vehicles.car.params import load_car
     from vehicles.car.route import Route
 
+    listed = world.ground_vehicles
+    sources = []
+    if world.traffic.engine == "sumo" and world.traffic.cars:
+        listed = listed[:-world.traffic.cars]
+        sources.append(_sumo(world, network, client, physics_hz, rng.spawn(1)[0]))
     params, drivers, routes = [], [], []
-    for g in world.ground_vehicles:
+    for g in listed:
         params.append(load_car(g.type))
         drivers.append(DriverConfig(**g.driver.model_dump()))  # the schema's model, field by field
         where = dict(start_s=g.route.start_s, lane=g.route.lane)
@@ -72,5 +79,22 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
             routes.append(Route(roads=tuple(g.route.roads), **where))
         else:
             routes.append(Route(random_walk=True, start_road=g.route.random_walk_from, **where))
-    return CarFleet(client, params, drivers, routes, network, physics_hz, rng,
-                    dynamics=[g.dynamics for g in world.ground_vehicles])
+    try:
+        return CarFleet(client, params, drivers, routes, network, physics_hz, rng,
+                        dynamics=[g.dynamics for g in listed], sources=sources)
+    except BaseException:
+        for src in sources:
+            src.close()
+        raise
+
+
+def _sumo(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
+    """SUMO co-simulation of the world's traffic section, its network cached under the skytrack cache."""
+    from vehicles.sumo import make_sumo_traffic
+    from vehicles.sumo.network import NetConfig
+    from worlds.map_cache import cache_root
+
+    spec = world.traffic
+    return make_sumo_traffic(network, n_vehicles=spec.cars, rate_hz=spec.rate_hz, physics_hz=physics_hz,
+                             client_id=client, rng=rng, work_dir=cache_root() / "sumo", car=spec.types[0],
+                             net=NetConfig(tls=spec.tls))

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,6 +34,7 @@ from simulator.recording import PybulletContacts, Recording
 from simulator.scene import Scene, SceneConfig
 from simulator.scene_query import PybulletSceneQuery
 from simulator.search_team import SearchTeamRun
+from worlds.traffic import TrafficPlacementError, with_traffic
 from simulator.seeding import RunSeeds
 from simulator.slots import AgentSlot, SensorSlot
 from simulator.tick import Assembly
@@ -65,8 +66,9 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOpti
     """Build geometry, sensors, estimators and guidance; raises :class:`WorldError` naming the entry on a bad one."""
     from vehicles.quadrotor.airframes import load_airframe
 
+    geometry = build_geometry(loaded.world, loaded.path, seeds.generator("world/town"))
+    loaded = _add_traffic(loaded, geometry, seeds)
     world = loaded.world
-    geometry = build_geometry(world, loaded.path, seeds.generator("world/town"))
     issues = []
     for i, u in enumerate(world.uavs):
         try:
@@ -108,6 +110,28 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOpti
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents, hcmci=hcmci)
+
+
+def _add_traffic(loaded: LoadedWorld, geometry: WorldGeometry, seeds: RunSeeds) -> LoadedWorld:
+    """The world with its generated background traffic (``traffic.cars``) among its ground vehicles."""
+    spec = loaded.world.traffic
+    if spec.cars == 0:
+        return loaded
+    if geometry.network is None:
+        raise WorldError(str(loaded.path), [WorldIssue("traffic.cars", spec.cars, "0 in a world without roads "
+                                                       "(give roads: streets, osm or town)")])
+    if spec.engine == "sumo":
+        from vehicles.sumo import INSTALL_HINT, sumo_available
+
+        if not sumo_available():
+            raise WorldError(str(loaded.path), [WorldIssue("traffic.engine", spec.engine, "an installed engine: "
+                                                           f"SUMO is not installed ({INSTALL_HINT})")])
+    try:
+        world = with_traffic(loaded.world, geometry.network, seeds.generator("world/traffic"))
+    except TrafficPlacementError as exc:
+        raise WorldError(str(loaded.path), [WorldIssue("traffic.cars", spec.cars, f"a number of cars that fits "
+                                                       f"({exc})")]) from None
+    return replace(loaded, world=world)
 
 
 def build_teams(methods: list[str], agents: list[AgentSlot], hcmci: HcmciConfig | None) -> list[TeamProtocol]:

@@ -214,5 +214,9 @@ class Assembly:
             self.recording.collisions(tick, t)
 
     def close(self) -> None:
-        self.scene.close()
+        try:
+            if self.cars is not None and hasattr(self.cars, "close"):
+                self.cars.close()  # an external traffic source (SUMO) ends its simulation
+        finally:
+            self.scene.close()
 

@@ -96,24 +96,32 @@ class Truth:
         return {k: np.concatenate([v, np.full(n_decoys, -1, dtype=int)]) for k, v in self.car_attributes.items()}
 
     def targets(self) -> TargetTruth:
-        """The ground vehicles, then the static decoys (rows ``len(cars) + k``; cars' cone rows are unused)."""
+        """The ground vehicles on the road, then the static decoys (ids ``len(cars) + k``; cars' cone rows are
+        unused). A traffic source's slot holding no vehicle now is left out (its id skipped)."""
         if self.cars is None and self.decoys is None:
             return TargetTruth.empty()
+        n_dec = 0 if self.decoys is None else len(self.decoys)
         if self.cars is None:
             p, v, yaw, kinds, segs = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), (), np.zeros(0, int)
+            on = np.zeros(0, dtype=int)
         else:
             st = self.cars.state
-            p, v, yaw, kinds, segs = st.p_W, st.v_W, np.asarray(st.yaw), self.car_kinds, np.asarray(self.cars.body_ids)
+            on = np.arange(len(self.car_kinds)) if st.active is None else np.flatnonzero(st.active)
+            p, v, yaw, segs = st.p_W[on], st.v_W[on], np.asarray(st.yaw)[on], np.asarray(self.cars.body_ids)[on]
+            kinds = tuple(self.car_kinds[i] for i in on)
+        attrs = self._attributes(n_dec)
+        if attrs is not None and len(on) != len(self.car_kinds):
+            keep = np.r_[on, len(self.car_kinds) + np.arange(n_dec)]
+            attrs = {k: a[keep] for k, a in attrs.items()}
         if self.decoys is None:
-            return TargetTruth(ids=np.arange(len(kinds)), p_W=p, v_W=v, kind=kinds, yaw=yaw, seg_ids=segs,
-                               attributes=self._attributes(0))
+            return TargetTruth(ids=on, p_W=p, v_W=v, kind=kinds, yaw=yaw, seg_ids=segs, attributes=attrs)
         d, n = self.decoys, len(kinds)
-        return TargetTruth(ids=np.arange(n + len(d)), p_W=np.vstack([p, d.p_W]),
-                           v_W=np.vstack([v, np.zeros((len(d), 3))]), kind=(*kinds, *("decoy",) * len(d)),
+        return TargetTruth(ids=np.r_[on, len(self.car_kinds) + np.arange(n_dec)], p_W=np.vstack([p, d.p_W]),
+                           v_W=np.vstack([v, np.zeros((n_dec, 3))]), kind=(*kinds, *("decoy",) * n_dec),
                            yaw=np.concatenate([yaw, d.yaw]),
                            cone_axis_W=np.vstack([np.tile([0.0, 0.0, 1.0], (n, 1)), d.cone_axis_W]),
                            cone_half_angle=np.concatenate([np.full(n, np.pi), d.cone_half_angle]),
-                           seg_ids=np.concatenate([segs, d.body_ids]), attributes=self._attributes(len(d)))
+                           seg_ids=np.concatenate([segs, d.body_ids]), attributes=attrs)
 
     def own_state(self, i: int, t: float) -> OwnState:
         """UAV ``i``'s navigation state at ``t`` (s): its true position, velocity and yaw."""

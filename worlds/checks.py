@@ -69,6 +69,8 @@ def _world_issues(world: World) -> list[WorldIssue]:
         rate(f"ground_vehicles[{i}].driver.rate_hz", g.driver.rate_hz,
              "" if given else f"; the driver's default is {g.driver.rate_hz} Hz: give ground_vehicles[{i}].driver."
                               "rate_hz one that divides the physics rate")
+    if world.traffic.cars:
+        rate("traffic.rate_hz", world.traffic.rate_hz)
     if world.comms.latency_s is not None and whole_ticks(world.comms.latency_s, hz) is None:
         issues.append(WorldIssue("comms.latency_s", world.comms.latency_s,
                                  f"a whole number of physics ticks (multiples of {1 / hz:.6g} s at "

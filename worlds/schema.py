@@ -18,6 +18,7 @@ from pydantic import ConfigDict, Field, field_validator, model_validator
 from worlds.schema_autonomy import (AutonomySpec, EstimatorSpec, FormationSpec, FusionSpec, GuidanceSpec, ImmSpec,
                                     InfoPlanSpec, JacobiGainsSpec, SearchSpec, SetMembershipSpec)
 from worlds.schema_base import NonNegFloat, PositiveFloat, Strict, Vec2, Vec3
+from worlds.schema_traffic import DriverSpec, TrafficSpec
 
 from worlds.catalog import CAR_ATTRIBUTES, CAR_COLOURS, CAR_TYPES
 
@@ -266,69 +267,6 @@ class RouteSpec(Strict):
     def _exactly_one(self) -> RouteSpec:
         if (self.roads is None) == (self.random_walk_from is None):
             raise ValueError("give exactly one of 'roads' or 'random_walk_from'")
-        return self
-
-
-class DriverSpec(Strict):
-    """Behaviour of one car's road-following driver: the one declaration of its settings.
-    ``vehicles.car.driver_config.DriverConfig`` is this model (frozen, plus the driver's tick arithmetic), so a world
-    file's ``driver:`` keys, their defaults and their bounds are the driver's own."""
-
-    rate_hz: int = Field(40, gt=0, description="driver update rate, Hz; must divide sim.physics_hz")
-    lateral_accel_max: PositiveFloat = Field(
-        2.5, description="largest lateral acceleration v^2 |kappa| the speed profile allows, m/s^2")
-    accel: PositiveFloat = Field(1.5, description="comfortable acceleration a of the speed law and IDM, m/s^2, "
-                                                  "capped by the car's max_accel")
-    decel_plan: PositiveFloat = Field(2.0, description="deceleration of the speed envelope and IDM comfortable "
-                                                       "deceleration b, m/s^2")
-    decel_max: PositiveFloat = Field(6.0, description="hardest braking the driver commands, m/s^2, capped by the "
-                                                      "car's max_decel; >= decel_plan")
-    speed_gain: PositiveFloat = Field(1.5, description="speed-tracking gain k_v, 1/s")
-    stanley_gain: PositiveFloat = Field(2.0, description="Stanley cross-track gain k, 1/s: delta = psi_path - psi - "
-                                                         "atan(k e_front / (v + v_soft))")
-    stanley_softening: PositiveFloat = Field(1.0, description="Stanley softening speed v_soft, m/s")
-    yaw_damping: NonNegFloat = Field(0.05, description="gain on the yaw-rate error, s: delta += -c (omega - v "
-                                                       "kappa_path)")
-    lookahead_margin: float = Field(20.0, gt=0, le=1000.0,
-                                    description="distance beyond the braking distance v^2 / (2 b_plan) scanned for "
-                                                "curvature and stops, m, at most 1 km")
-    path_horizon: float = Field(150.0, gt=0, le=2000.0,
-                                description="lane path kept built ahead of the car, m, at most 2 km (the path is "
-                                            "sampled every path_ds and rebuilt as the car drives)")
-    path_ds: float = Field(1.0, ge=0.05, le=10.0, description="lane-path sample spacing, m, in [0.05, 10]")
-    corner_length: PositiveFloat = Field(7.0, description="junction corner: metres cut from each side of a junction "
-                                                          "and replaced by a smooth turn, m")
-    stop_probability: float = Field(1.0, ge=0, le=1, description="probability of stopping at a junction when the "
-                                                                 "route does not list its stops, in [0, 1]")
-    dwell_range: tuple[NonNegFloat, NonNegFloat] = Field((2.0, 8.0), description="uniform range (min, max) of the "
-                                                                                 "dwell time at a stop, s")
-    stop_window: PositiveFloat = Field(2.5, description="a car slower than stopped_speed within this distance of a "
-                                                        "stop line has stopped there, m")
-    stopped_speed: PositiveFloat = Field(0.3, description="speed below which a car counts as stopped, m/s")
-    cruise_fraction_range: tuple[float, float] = Field(
-        (0.7, 1.0), description="uniform range (min, max) of the cruise speed as a fraction of each road's speed "
-                                "limit, 0 < min <= max <= 1")
-    cruise_change_period: NonNegFloat = Field(30.0, description="mean time between random cruise-speed changes, s, "
-                                                                "exponentially distributed; 0 disables changes")
-    idm_s0: PositiveFloat = Field(2.0, description="IDM standstill gap s0, m, bumper to bumper")
-    idm_time_headway: PositiveFloat = Field(1.5, description="IDM time headway T, s")
-    follow_range: PositiveFloat = Field(80.0, description="distance ahead searched for a leading car, m")
-    random_walk_chunk: int = Field(5, ge=1, le=100, description="roads asked from the network per random-walk "
-                                                                "extension")
-
-    @model_validator(mode="after")
-    def _consistent(self) -> DriverSpec:
-        if self.decel_max < self.decel_plan:
-            raise ValueError(f"decel_max >= decel_plan ({self.decel_plan:g} m/s^2), got decel_max {self.decel_max:g}")
-        lo, hi = self.dwell_range
-        if lo > hi:
-            raise ValueError(f"dwell_range with 0 <= min <= max, got {list(self.dwell_range)}")
-        lo, hi = self.cruise_fraction_range
-        if not (0.0 < lo <= hi <= 1.0):
-            raise ValueError(f"cruise_fraction_range with 0 < min <= max <= 1, got {list(self.cruise_fraction_range)}")
-        if self.path_horizon < 4 * self.corner_length:
-            raise ValueError(f"path_horizon >= 4 x corner_length ({4 * self.corner_length:g} m), got "
-                             f"{self.path_horizon:g}")
         return self
 
 
@@ -647,6 +585,8 @@ class World(Strict):
                                              "{id, cue: {sigma_m}} (default: the vehicles of role target, cue "
                                              "sigma 20 m)")
     decoys: list[DecoySpec] = Field(default_factory=list)
+    traffic: TrafficSpec = Field(default_factory=TrafficSpec, description="background traffic generated on the "
+                                 "roads besides the listed ground_vehicles (default: none)")
     uavs: list[UavSpec] = Field(default_factory=list)
     comms: CommsSection = Field(default_factory=CommsSection)
     render: RenderSection = Field(default_factory=RenderSection)

@@ -27,7 +27,7 @@ from vehicles.car.route import Route
 from vehicles.car.traffic import find_leaders
 from vehicles.car.traffic_fleet import TrafficFleet
 from vehicles.car.traffic_kernel import R_OMEGA, R_VFWD, R_VX, R_VY, R_X, R_Y, R_YAW, R_YAWREAD
-from vehicles.car.traffic_source import OtherCars
+from vehicles.car.traffic_source import OtherCars, TrafficSource
 
 __all__ = ["CarFleet", "CarState", "SYNC_RADIUS"]
 
@@ -51,7 +51,8 @@ class CarState:
     v_W : np.ndarray
         (N, 3) velocities (m/s).
     a_W : np.ndarray
-        (N, 3) accelerations, finite difference of v_W over one physics step (m/s^2).
+        (N, 3) accelerations, finite difference of v_W over one physics step (m/s^2); 0 for an external traffic
+        source's slots.
     yaw : np.ndarray
         (N,) headings (rad).
     speed : np.ndarray
@@ -64,6 +65,9 @@ class CarState:
         (N,) offset from the road's centre-line, positive left of travel (m).
     stopped : np.ndarray
         (N,) True while standing at a junction or at the end of the route.
+    active : np.ndarray | None
+        (N,) True for a car on the road; False for a traffic source's slot holding no vehicle now (its body parked out
+        of sight, its row to be ignored). None: every car is active.
     """
 
     tick: int
@@ -77,6 +81,7 @@ class CarState:
     s: np.ndarray
     lateral: np.ndarray
     stopped: np.ndarray
+    active: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -90,6 +95,7 @@ class _Arrays:
     a_W: np.ndarray
     yaw: np.ndarray
     speed: np.ndarray
+    active: np.ndarray
 
 
 class CarFleet:
@@ -116,6 +122,10 @@ class CarFleet:
     dynamics : Sequence[str] | None
         How each car moves, a key of :data:`vehicles.car.dynamics.CAR_DYNAMICS` (``"physics"``: PyBullet multibody;
         ``"kinematic"``: kinematic bicycle carrying a box); None = all ``"physics"``.
+    sources : Sequence[TrafficSource]
+        External traffic (SUMO co-simulation, :mod:`vehicles.sumo`): each source's slots are cars after the listed
+        ones, in order; the source steps them, the physics cars' drivers follow its active vehicles and it hears
+        where the physics cars are.
 
     Attributes
     ----------
@@ -126,7 +136,7 @@ class CarFleet:
 
     def __init__(self, client_id: int, params: Sequence[CarParams], drivers: Sequence[DriverConfig],
                  routes: Sequence[Route], network: NetworkLike, physics_hz: int, rng: np.random.Generator,
-                 dynamics: Sequence[str] | None = None) -> None:
+                 dynamics: Sequence[str] | None = None, sources: Sequence[TrafficSource] = ()) -> None:
         n = len(params)
         dynamics = ["physics"] * n if dynamics is None else list(dynamics)
         if not (len(drivers) == n == len(routes) == len(dynamics)) or n == 0:
@@ -151,13 +161,21 @@ class CarFleet:
             fleet = TrafficFleet(client_id, [self.drivers[i] for i in idx], [params[i] for i in idx],
                                  [f"car{i}" for i in idx], physics_hz)
             self.traffic.append((idx, fleet))
-        body = np.zeros(n, dtype=int)
+        self.sources: list[tuple[np.ndarray, TrafficSource]] = []
+        start = n
+        for src in sources:
+            self.sources.append((np.arange(start, start + len(src.ids)), src))
+            start += len(src.ids)
+        self._n = start
+        body = np.zeros(start, dtype=int)
         for i, dyn in self.dynamics.items():
             body[i] = dyn.body_id
         for idx, fleet in self.traffic:
             body[idx] = fleet.body_ids
+        for idx, src in self.sources:
+            body[idx] = src.body_ids
         self.body_ids = body
-        self._lengths = [par.length for par in params]
+        self._lengths = [par.length for par in params] + [float(x) for _, src in self.sources for x in src.lengths]
         self._length_arr = np.array(self._lengths)
         self._events: list[tuple[int, dict]] = []
         self._off_road = np.zeros(n, dtype=bool)
@@ -191,7 +209,7 @@ class CarFleet:
         """Every car's reading at the last tick as arrays, with the heading and forward speed of each car and its
         acceleration, the finite difference of v_W over the last physics step."""
         if self._arr is None:
-            n, tick = len(self.drivers), self._tick
+            n, tick = self._n, self._tick
             p_W, q_WB, v_W, a_W = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 3)), np.zeros((n, 3))
             omega, yaw, speed = np.zeros(n), np.zeros(n), np.zeros(n)
             if self._phys:
@@ -213,7 +231,15 @@ class CarFleet:
                 if prev is not None:
                     a_W[idx, 0] = (now[:, R_VX] - prev[:, R_VX]) * self.physics_hz
                     a_W[idx, 1] = (now[:, R_VY] - prev[:, R_VY]) * self.physics_hz
-            self._arr = _Arrays(p_W=p_W, q_WB=q_WB, v_W=v_W, omega_z=omega, a_W=a_W, yaw=yaw, speed=speed)
+            active = np.ones(n, dtype=bool)
+            for idx, src in self.sources:
+                ps = src.poses(tick)
+                p_W[idx, 0], p_W[idx, 1], p_W[idx, 2] = ps.xy[:, 0], ps.xy[:, 1], src.ground_z
+                q_WB[idx, 2], q_WB[idx, 3] = np.sin(0.5 * ps.yaw), np.cos(0.5 * ps.yaw)
+                v_W[idx, :2], omega[idx], yaw[idx], speed[idx] = ps.v_xy, ps.yaw_rate, ps.yaw, ps.speed
+                active[idx] = ps.active  # a_W stays 0: the source's velocities are piecewise constant per step
+            self._arr = _Arrays(p_W=p_W, q_WB=q_WB, v_W=v_W, omega_z=omega, a_W=a_W, yaw=yaw, speed=speed,
+                                active=active)
         return self._arr
 
     def apply_actuation(self) -> None:
@@ -221,19 +247,24 @@ class CarFleet:
         near a dynamic body (:attr:`near_points`, the physics cars) move to their pose of the coming tick."""
         for i, dyn in self.dynamics.items():
             dyn.actuate(self.drivers[i].command)
-        if self.traffic:
+        if self.traffic or self.sources:
             pts = [self._arrays().p_W[self._phys, :2]] if self._phys else []
             if self.near_points is not None:
                 pts.append(np.asarray(self.near_points(), dtype=float).reshape(-1, 2)[:, :2])
             if pts:
                 near = np.vstack(pts)
-                for _, fleet in self.traffic:
+                for _, fleet in [*self.traffic, *self.sources]:
                     fleet.sync_near(self._tick + 1, near, SYNC_RADIUS)
 
     def sync_scene(self) -> None:
         """Place every kinematic car's box at its pose of the last tick (before sensors or cameras look)."""
-        for _, fleet in self.traffic:
+        for _, fleet in [*self.traffic, *self.sources]:
             fleet.sync_scene(self._tick)
+
+    def close(self) -> None:
+        """Release the external traffic sources (a SUMO simulation); idempotent."""
+        for _, src in self.sources:
+            src.close()
 
     def after_step(self, tick: int) -> None:
         """After ``p.stepSimulation()``: read the cars' state and run the drivers due at ``tick``."""
@@ -249,11 +280,15 @@ class CarFleet:
                     fleet.advance(tick, others)
                     self._events += [(int(idx[e["car"]]), dict(e, car=int(idx[e["car"]])))
                                      for e in fleet.pop_events()]
+        for idx, src in self.sources:
+            src.advance(tick, self._others())
+            self._events += [(int(idx[e["car"]]), dict(e, car=int(idx[e["car"]]))) for e in src.pop_events()]
         if self._phys and tick % self._every_gcd == 0:
             due = [i for i in self._phys if tick % self._every[i] == 0]
             if due:
                 x = self._arrays()
-                leaders = find_leaders(self.drivers, x.p_W[:, :2], x.yaw, x.speed, self._lengths, followers=due)
+                xy = np.where(x.active[:, None], x.p_W[:, :2], np.inf)  # a slot without a vehicle leads no one
+                leaders = find_leaders(self.drivers, xy, x.yaw, x.speed, self._lengths, followers=due)
                 for i in due:
                     drv = self.drivers[i]
                     drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i],
@@ -285,9 +320,10 @@ class CarFleet:
         """Ground truth after the last ``after_step``."""
         if self._cache is None:
             x = self._arrays()
-            n = len(self.drivers)
+            n = self._n
             road_id, s, lateral = [""] * n, np.zeros(n), np.zeros(n)
-            stopped = np.array([d.stopped for d in self.drivers])
+            stopped = np.zeros(n, dtype=bool)
+            stopped[:len(self.drivers)] = [d.stopped for d in self.drivers]
             for i in self._phys:
                 road_id[i], s[i], lateral[i] = self.drivers[i].locate(x.p_W[i, :2])
             for idx, fleet in self.traffic:
@@ -295,9 +331,15 @@ class CarFleet:
                 for i, rid in zip(idx, ids, strict=True):
                     road_id[i] = rid
                 s[idx], lateral[idx] = s_f, lat_f
+            for idx, src in self.sources:
+                ids, s_f, lat_f, stop_f = src.road_positions(self._tick)
+                for i, rid in zip(idx, ids, strict=True):
+                    road_id[i] = rid
+                s[idx], lateral[idx], stopped[idx] = s_f, lat_f, stop_f
             self._cache = CarState(
                 tick=self._tick, p_W=x.p_W.copy(), q_WB=x.q_WB.copy(), v_W=x.v_W.copy(), a_W=x.a_W.copy(),
-                yaw=x.yaw.copy(), speed=x.speed.copy(), road_id=road_id, s=s, lateral=lateral, stopped=stopped)
+                yaw=x.yaw.copy(), speed=x.speed.copy(), road_id=road_id, s=s, lateral=lateral, stopped=stopped,
+                active=None if not self.sources else x.active.copy())
         return self._cache
 
     def pop_events(self) -> list[dict]:
@@ -309,4 +351,4 @@ class CarFleet:
         return [e for _, e in ev]
 
     def __len__(self) -> int:
-        return len(self.drivers)
+        return self._n

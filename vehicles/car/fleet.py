@@ -248,7 +248,7 @@ class CarFleet:
         for i, dyn in self.dynamics.items():
             dyn.actuate(self.drivers[i].command)
         if self.traffic or self.sources:
-            pts = [self._arrays().p_W[self._phys, :2]] if self._phys else []
+            pts = [np.array([r[0:2] for r in self._rows])] if self._phys else []
             if self.near_points is not None:
                 pts.append(np.asarray(self.near_points(), dtype=float).reshape(-1, 2)[:, :2])
             if pts:

@@ -57,6 +57,29 @@ def _wrap_float(a: float) -> float:
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
+_SAMPLES: dict[tuple[int, float, float, int, float], tuple[object, tuple[np.ndarray, ...]]] = {}
+_SAMPLES_MAX = 8192  # sampled lane sections kept (a few MB for a city's worth of roads)
+
+
+def _sampled(road: RoadLike, a: float, b: float, n: int, offset: float) -> tuple[np.ndarray, ...]:
+    """(s, xy, heading, kappa) of ``n`` samples from ``a`` to ``b`` (m) of the lane at ``offset`` on ``road``, kept:
+    every path that crosses a road whole samples it the same way, and a car rebuilds its path at each new road
+    (drivers of a city's traffic would otherwise spend most of their time sampling splines). The arrays are
+    read-only; the same numbers as :func:`sample_road` of ``np.linspace(a, b, n)``."""
+    key = (id(road), a, b, n, offset)
+    hit = _SAMPLES.get(key)
+    if hit is not None and hit[0] is road:
+        return hit[1]
+    s = np.linspace(a, b, n)
+    out = (s, *sample_road(road, s, offset))
+    for arr in out:
+        arr.setflags(write=False)
+    if len(_SAMPLES) >= _SAMPLES_MAX:
+        _SAMPLES.clear()
+    _SAMPLES[key] = (road, out)
+    return out
+
+
 @njit(cache=True)
 def _closest_segment(xy: np.ndarray, t: np.ndarray, seg: np.ndarray, lo: int, hi: int, px: float,
                      py: float) -> tuple[int, float, float]:
@@ -145,8 +168,7 @@ class LanePath:
             b = road.length - cuts[k] if k + 1 < len(roads) and not smooth[k] else road.length
             a = min(a, b)
             n = max(2, int(math.ceil((b - a) / ds)) + 1)
-            s = np.linspace(a, b, n)
-            p, h, kap = sample_road(road, s, offsets[k])
+            s, p, h, kap = _sampled(road, a, b, n, offsets[k])
             if k > 0 and smooth[k - 1]:  # tangent-continuous join: no corner, drop the duplicated node sample
                 junction_index.append(sum(len(x) for x in xy) - 1)
                 s, p, h, kap, n = s[1:], p[1:], h[1:], kap[1:], n - 1
@@ -192,8 +214,8 @@ class LanePath:
     @staticmethod
     def _smooth_join(a: RoadLike, b: RoadLike, off_a: float, off_b: float) -> bool:
         """True when lane ``a`` runs on into lane ``b`` without a heading or position jump (no corner needed)."""
-        pa, ha, _ = sample_road(a, np.array([a.length]), off_a)
-        pb, hb, _ = sample_road(b, np.array([0.0]), off_b)
+        _, pa, ha, _ = _sampled(a, a.length, a.length, 1, off_a)
+        _, pb, hb, _ = _sampled(b, 0.0, 0.0, 1, off_b)
         jump = abs(float(_wrap(hb[0] - ha[0])))
         return jump < _SMOOTH_HEADING and float(np.linalg.norm(pb[0] - pa[0])) < _SMOOTH_GAP
 

@@ -43,6 +43,7 @@ __all__ = ["TrafficFleet"]
 
 _MODES = {"drive": MODE_DRIVE, "stopped": MODE_STOPPED, "done": MODE_DONE}
 _TWO = 2.0  # the exponent of the IDM term, passed at run time (see vehicles.car.traffic_kernel)
+_NEAR_MARGIN = 10.0  # m: how far a car or a UAV may move within one fleet period, with room to spare (30 m/s x 0.1 s)
 
 
 class TrafficFleet:
@@ -110,6 +111,7 @@ class TrafficFleet:
         self._placed = np.zeros(n, dtype=np.int64)  # tick of each box's last placement
         self._box_xy = np.array([xy for xy, _ in spawns], dtype=float)
         self._events: list[dict] = []
+        self._near, self._near_key = np.zeros(0, dtype=int), (-1, 0)  # cars near the points this period (sync_near)
         self.python_steps = 0  # driver steps taken by the Python drivers (rare: path rebuilds, stops, ...)
         self.compiled_steps = 0
 
@@ -281,16 +283,24 @@ class TrafficFleet:
         self._place(np.flatnonzero(self._placed != tick), tick)
 
     def sync_near(self, tick: int, points_xy: np.ndarray, radius: float) -> None:
+        """Place the boxes within ``radius`` of ``points_xy`` at their pose of ``tick``. The cars that may be that
+        near during the period (at its start or end, or with the box left there, within ``radius`` +
+        :data:`_NEAR_MARGIN` of the points) are found once per period; each tick places those of them not yet
+        placed for it (a superset of the cars within ``radius``)."""
         pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
         if not len(pts):
             return
-        r = self._rows(tick)
-        stale = self._placed != tick
-        near = np.zeros(len(r), dtype=bool)
-        for q in pts:  # a handful of points (UAVs, physics cars) against every car
-            near |= np.hypot(r[:, R_X] - q[0], r[:, R_Y] - q[1]) < radius
-            near |= np.hypot(self._box_xy[:, 0] - q[0], self._box_xy[:, 1] - q[1]) < radius
-        self._place(np.flatnonzero(near & stale), tick)
+        if self._near_key != (self._t0, len(pts)):
+            reach = radius + _NEAR_MARGIN
+            near = np.zeros(len(self.drivers), dtype=bool)
+            ends = (self.buf[:, 0], self.buf[:, self.every])
+            for q in pts:  # a handful of points (UAVs, physics cars) against every car
+                for xy in (ends[0][:, [R_X, R_Y]], ends[1][:, [R_X, R_Y]], self._box_xy):
+                    near |= np.hypot(xy[:, 0] - q[0], xy[:, 1] - q[1]) < reach
+            self._near, self._near_key = np.flatnonzero(near), (self._t0, len(pts))
+        idx = self._near[self._placed[self._near] != tick]
+        if len(idx):
+            self._place(idx, tick)
 
     def pop_events(self) -> list[dict]:
         ev, self._events = self._events, []

@@ -1,0 +1,77 @@
+"""Worlds with generated traffic (``traffic:``): the built-in fleet's cars placed and driven, SUMO co-simulation run
+for real (the ``traffic`` extra is part of ``make test``), one seed one run, and the clear refusals."""
+
+import numpy as np
+import pytest
+
+from simulator.api import run
+from worlds.errors import WorldError
+from worlds.loader import load_world
+
+BUILTIN = ["traffic.cars=40", "traffic.rate_hz=20"]
+SUMO = ["traffic.engine=sumo", "traffic.cars=40", "traffic.rate_hz=10"]
+
+
+def _truth(res):
+    vt = res.stream("vehicle_truth")
+    return vt
+
+
+def test_builtin_traffic_cars_join_the_ground_vehicles_and_drive_their_lanes(tmp_path):
+    res = run("road_standoff", duration=8.0, seed=4, out_dir=tmp_path / "a", overrides=BUILTIN)
+    assert res.status == "completed"
+    vt = _truth(res)
+    ids = sorted(set(vt["vehicle"].tolist()))
+    assert len(ids) == 41  # the target and 40 generated cars
+    first, last = vt["t"] == vt["t"].min(), vt["t"] == vt["t"].max()
+    moved = np.hypot(vt["x"][last] - vt["x"][first], vt["y"][last] - vt["y"][first])
+    assert np.mean(moved > 10.0) > 0.75  # driving (the rest stopped at a junction, 2-8 s dwells)
+    assert not [e for e in res.record.events if e["type"] == "car_left_road"]  # centres within the carriageways
+    assert np.max(np.abs(vt["lateral"])) < 7.0  # (the town's widest roads: two lanes each way, 3.5 m)
+    xy = np.column_stack([vt["x"][first], vt["y"][first]])
+    gaps = np.linalg.norm(xy[:, None] - xy[None], axis=2) + np.eye(len(xy)) * 1e9
+    assert gaps.min() >= 12.0 - 1e-6  # traffic.min_spacing_m
+
+
+def test_traffic_that_does_not_fit_is_refused_before_the_run(tmp_path):
+    with pytest.raises(WorldError) as info:
+        run("road_standoff", duration=1.0, out_dir=tmp_path / "b",
+            overrides=["traffic.cars=5000", "traffic.min_spacing_m=200"])
+    msg = str(info.value)
+    assert "traffic.cars = 5000" in msg and "found no room for more" in msg
+    assert not (tmp_path / "b").exists()
+
+
+def test_sumo_traffic_runs_and_one_seed_gives_one_run(tmp_path):
+    runs = [run("road_standoff", duration=6.0, seed=3, out_dir=tmp_path / f"s{k}", overrides=SUMO) for k in range(2)]
+    assert all(r.status == "completed" for r in runs)
+    a, b = (_truth(r) for r in runs)
+    for key in ("x", "y", "speed", "vehicle"):
+        assert np.array_equal(a[key], b[key]), key
+    # SUMO's vehicles are on the road, on skytrack's lanes: the recorded lateral offsets from the centre-lines of the
+    # roads they are on stay within the carriageway (inside junctions, the nearest road)
+    on = np.isin(a["vehicle"], np.arange(1, 41)) & (a["road"] != "")
+    lat = np.abs(a["lateral"][on])
+    off_lane = np.abs(lat - 3.5 * (np.maximum(np.round(lat / 3.5 - 0.5), 0) + 0.5))  # from the nearest lane centre
+    # on lane centres but inside junctions (there measured from the nearest road): median and 3rd quartile
+    assert on.sum() > 100 and np.median(off_lane) < 0.01 and np.percentile(off_lane, 75) < 0.1 and lat.max() < 7.5
+    other = run("road_standoff", duration=6.0, seed=4, out_dir=tmp_path / "s2", overrides=SUMO)
+    assert not np.array_equal(_truth(other)["x"], a["x"])
+
+
+def test_a_sumo_world_without_sumo_is_refused_with_the_install_hint(monkeypatch, tmp_path):
+    import vehicles.sumo as sumo
+
+    monkeypatch.setattr(sumo, "sumo_available", lambda: False)
+    with pytest.raises(WorldError) as info:
+        run("road_standoff", duration=1.0, out_dir=tmp_path / "c", overrides=SUMO)
+    assert "traffic.engine = 'sumo'" in str(info.value) and "pip install 'skytrack[traffic]'" in str(info.value)
+
+
+def test_the_traffic_section_is_checked():
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", ["traffic.rate_hz=7", "traffic.cars=3"])
+    assert "traffic.rate_hz = 7" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", ["traffic.engine=carla"])
+    assert "traffic.engine" in str(info.value)

@@ -88,7 +88,8 @@ def load_golden() -> dict[str, dict[str, str]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--write", action="store_true", help="rewrite golden_records.json (else compare and report)")
+    ap.add_argument("--write", action="store_true", help="rewrite golden_records.json (else compare and report); "
+                    "with --only, only those worlds' records")
     ap.add_argument("--only", default="", help="only worlds whose name contains this")
     args = ap.parse_args(argv)
     records = {}
@@ -98,8 +99,9 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             records[f"{name}/{seed}"] = run_case(name, seed, Path(tmp) / f"{name}-{seed}")
             print(f"{name}/{seed}: {len(records[f'{name}/{seed}'])} digests", file=sys.stderr)
-    if args.write:
-        data = {"duration_s": DURATION_S, "records": records}
+    if args.write:  # with --only, the other worlds' records are kept as they are
+        kept = {k: v for k, v in load_golden().items() if args.only and k not in records}
+        data = {"duration_s": DURATION_S, "records": {**kept, **records}}
         GOLDEN_FILE.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
         return 0
     golden, bad = load_golden(), 0

@@ -69,6 +69,8 @@ class Comms:
         self._heard: dict[int, dict[int, TeammateState]] = {}
         self._shared: dict[int, dict[int, TargetEstimate | TrackPicture]] = {}
         self._local: dict[int, TargetEstimate | TrackPicture | None] = {}
+        self._team: tuple[TeammateState, ...] = ()  # every UAV's true state at self._team_tick (perfect comms)
+        self._team_tick: tuple[int, float] | None = None
 
     def positions(self) -> dict[str, np.ndarray]:
         """Every UAV's position by id: where the radio sends from and to."""
@@ -83,9 +85,8 @@ class Comms:
         """
         shared = self._shared.setdefault(i, {})
         if self.channel is None:
-            st = self.quads.state
-            mates = [TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=yaw_of(st.q_WB[j]))
-                     for j in range(len(self.uav_ids)) if j != i]
+            team = self._true_states(t, tick)
+            mates = [*team[:i], *team[i + 1:]]
             estimates = [e for j, e in self._local.items() if j != i and e is not None]
             return mates, estimates
         known = self._heard.setdefault(i, {})
@@ -103,6 +104,16 @@ class Comms:
             elif isinstance(msg, DetectionMessage):
                 self._deliver_detections(i, relayed(msg.detections, env.t_arrival - msg.t_sent))
         return [known[j] for j in sorted(known)], [shared[j] for j in sorted(shared)]
+
+    def _true_states(self, t: float, tick: int) -> tuple[TeammateState, ...]:
+        """Every UAV's true state at ``tick`` (perfect comms), built once per tick and shared by every inbox of that
+        tick: the states do not change between the agents' turns (the physics steps before them), so each agent's
+        inbox costs one list of references instead of N − 1 new states, and a UAV's cost does not grow with N."""
+        if self._team_tick != (tick, t):
+            st = self.quads.state
+            self._team = TeammateState.team(t, st.p_W, st.v_W, [yaw_of(q) for q in st.q_WB])
+            self._team_tick = (tick, t)
+        return self._team
 
     def share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int,
                        picture: TrackPicture | None = None) -> None:

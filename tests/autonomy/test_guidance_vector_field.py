@@ -50,3 +50,25 @@ def test_no_target_loiters():
     g = VectorFieldGuidance(VectorFieldConfig())
     sp = g.command(OwnState(t=0, p_W=[0, 0, 50], v_W=[0, 0, 0], yaw=0.0), None, [], 0.0)
     assert sp.heading_rate == pytest.approx(12.0 / 120.0)
+
+
+def test_phase_keeping_over_a_large_team_equals_the_per_teammate_formula():
+    """The team's phases come from one array operation: the same speed, bit for bit, as predicting and measuring
+    every teammate one by one (v_r = v_0 (1 + k_φ d mean_j e_j)), with and without shared plans."""
+    from autonomy.guidance.vector_field import phase_errors
+    from interfaces.state import TargetEstimate, TeammateState
+
+    cfg = VectorFieldConfig(standoff_radius=RD, nominal_speed=12.0, team_size=30, phase_gain=0.8, direction=-1)
+    law = VectorFieldGuidance(cfg, slot=4)
+    rng = np.random.default_rng(11)
+    target = TargetEstimate(t=9.5, p_W=[30.0, -20.0], v_W=[4.0, 1.0])
+    mates = [TeammateState(id=j, t=float(rng.uniform(9, 10)), p_W=[*rng.normal(scale=150.0, size=2), 60.0],
+                           v_W=[*rng.normal(scale=12.0, size=2), 0.0], phase_slot=(j * 7) % 30,
+                           plan_p_W=rng.normal(scale=150.0, size=(5, 2)) if j % 4 == 0 else None, plan_dt=0.5)
+             for j in range(29)]
+    t, r = 10.0, np.array([80.0, 95.0])
+    th = [float(np.arctan2(*(m.predict_xy(np.array([t]))[0] - target.predict_xy(t))[::-1])) for m in mates]
+    e = phase_errors(float(np.arctan2(r[1], r[0])), 4, th, [m.slot for m in mates], cfg.separation, cfg.direction)
+    expected = cfg.nominal_speed * float(np.clip(1.0 + cfg.phase_gain * cfg.direction * float(np.mean(e)), 0.5, 1.5))
+    got = law.relative_speed(r, target, mates, t)
+    assert got == expected and got != cfg.nominal_speed

@@ -7,14 +7,13 @@ plane matters; guidance laws use the horizontal components and say so.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from interfaces._checks import finite_number, finite_vector
 
-__all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackPicture", "TrackReport", "teammates_xy"]
+__all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackPicture", "TrackReport"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -208,33 +207,6 @@ class TeammateState:
             plan.setflags(write=False)
             object.__setattr__(self, "plan_p_W", plan)
 
-    @classmethod
-    def team(cls, t: float, p_W: np.ndarray, v_W: np.ndarray, yaw: Sequence[float]) -> tuple[TeammateState, ...]:
-        """The states of a whole team at one time ``t`` (s), teammate ``j`` with id ``j``: (N, 3) positions ``p_W``
-        (m), (N, 3) velocities ``v_W`` (m/s) and (N,) yaws (rad).
-
-        Equal, field for field, to ``TeammateState(id=j, t=t, p_W=p_W[j], v_W=v_W[j], yaw=yaw[j])`` for each j, but
-        checked once for the whole team (one finiteness test per array instead of four per teammate): what a
-        simulator builds at every tick for a team of tens of UAVs. Raises the same ``ValueError`` naming the
-        field as the constructor.
-        """
-        t = finite_number("TeammateState", "t", t)
-        P = _team_rows("p_W", p_W)
-        V = _team_rows("v_W", v_W)
-        psi = np.array(yaw, dtype=float).reshape(-1)
-        if P.shape[0] != V.shape[0] or psi.shape[0] != P.shape[0]:
-            raise ValueError(f"TeammateState.team needs one p_W, v_W and yaw per teammate, got {P.shape[0]}, "
-                             f"{V.shape[0]} and {psi.shape[0]}")
-        if not np.all(np.isfinite(psi)):
-            raise ValueError(f"TeammateState.yaw must be a finite number, got {yaw!r}")
-        out = []
-        for j in range(P.shape[0]):
-            state = object.__new__(cls)  # fields set as __post_init__ would leave them, without checking each again
-            state.__dict__.update(id=j, t=t, p_W=P[j], v_W=V[j], yaw=float(psi[j]), phase_slot=None, plan_p_W=None,
-                                  plan_dt=1.0)
-            out.append(state)
-        return tuple(out)
-
     @property
     def slot(self) -> int:
         """Phase slot on the orbit (``phase_slot`` or ``id``)."""
@@ -257,40 +229,3 @@ class TeammateState:
         if early.any():
             out[early] = pts[0] + np.outer(t[early] - self.t, self.v_W[:2])
         return out
-
-
-def _team_rows(name: str, value: np.ndarray) -> np.ndarray:
-    """``value`` as a read-only (N, 3) float copy (its rows are the teammates' read-only vectors); raises the
-    constructor's ``ValueError`` naming the field otherwise."""
-    arr = np.array(value, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 3 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"TeammateState.{name} must be a finite array of length 3 per teammate, got shape "
-                         f"{arr.shape}")
-    arr.setflags(write=False)
-    return arr
-
-
-def teammates_xy(teammates: Sequence[TeammateState], t: float) -> np.ndarray:
-    """(len(teammates), 2) horizontal positions (m) of ``teammates`` at ``t`` (s): row j equals
-    ``teammates[j].predict_xy([t])[0]``, bit for bit.
-
-    The teammates without a plan are extrapolated together, p + (t − t_j) v (the same arithmetic as
-    :meth:`TeammateState.predict_xy`, one array operation for the team instead of one call per teammate); those
-    with a plan are interpolated one by one.
-    """
-    n = len(teammates)
-    out = np.empty((n, 2))
-    if n == 0:
-        return out
-    plain = [k for k, tm in enumerate(teammates) if tm.plan_p_W is None]
-    if plain:
-        P = np.array([teammates[k].p_W[:2] for k in plain])
-        V = np.array([teammates[k].v_W[:2] for k in plain])
-        dt = t - np.array([teammates[k].t for k in plain])
-        out[plain] = P + dt[:, None] * V
-    if len(plain) < n:
-        at = np.array([t], dtype=float)
-        for k, tm in enumerate(teammates):
-            if tm.plan_p_W is not None:
-                out[k] = tm.predict_xy(at)[0]
-    return out

@@ -27,7 +27,8 @@ import numpy as np
 
 from autonomy.guidance.base import Guidance
 from interfaces.setpoints import UnicycleSetpoint
-from interfaces.state import OwnState, TargetEstimate, TeammateState, teammates_xy
+from interfaces.state import OwnState, TargetEstimate, TeammateState
+from interfaces.team_states import teammate_slots, teammates_xy
 
 __all__ = ["VectorFieldConfig", "VectorFieldGuidance", "wrap_angle", "phase_errors"]
 
@@ -152,7 +153,7 @@ class VectorFieldGuidance(Guidance):
         theta = float(np.arctan2(r[1], r[0]))
         d = teammates_xy(teammates, t) - target.predict_xy(t)  # the whole team at once: flat cost per teammate
         th_j = np.arctan2(d[:, 1], d[:, 0])
-        e = phase_errors(theta, self.slot, th_j, [tm.slot for tm in teammates], c.separation, c.direction)
+        e = phase_errors(theta, self.slot, th_j, teammate_slots(teammates), c.separation, c.direction)
         lo, hi = c.relative_speed_bounds
         factor = float(np.clip(1.0 + c.phase_gain * c.direction * float(np.mean(e)), lo, hi))
         return c.nominal_speed * factor

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from autonomy.guidance.unicycle import UnicycleParams
+from interfaces.state import OwnState
 from autonomy.guidance.vector_field import VectorFieldConfig, VectorFieldGuidance, wrap_angle
 from simulator.kinematic.unicycle_loop import LoopConfig, run_kinematic_loop
 
@@ -72,3 +73,24 @@ def test_phase_keeping_over_a_large_team_equals_the_per_teammate_formula():
     expected = cfg.nominal_speed * float(np.clip(1.0 + cfg.phase_gain * cfg.direction * float(np.mean(e)), 0.5, 1.5))
     got = law.relative_speed(r, target, mates, t)
     assert got == expected and got != cfg.nominal_speed
+
+
+def test_phase_keeping_reads_a_team_view_as_its_states():
+    """The stacked arrays of a perfect-comms inbox (TeamStates) give the speed its states give one by one."""
+    from interfaces.state import TargetEstimate
+    from interfaces.team_states import TeamStates
+
+    rng = np.random.default_rng(5)
+    n = 40
+    angles = np.linspace(0, 2 * np.pi, n, endpoint=False) + rng.normal(scale=0.2, size=n)
+    p = np.column_stack([RD * np.cos(angles), RD * np.sin(angles), np.full(n, 60.0)])
+    team = TeamStates.of(3.0, p, rng.normal(scale=12.0, size=(n, 3)), rng.normal(size=n))
+    cfg = VectorFieldConfig(standoff_radius=RD, nominal_speed=12.0, team_size=n, phase_gain=0.5)
+    target = TargetEstimate(t=2.8, p_W=[1.0, -2.0], v_W=[3.0, 0.5])
+    for k in (0, 17, n - 1):
+        law = VectorFieldGuidance(cfg, slot=k)
+        r = p[k, :2] - target.predict_xy(3.0)
+        view, states = team.without(k), list(team.without(k))
+        assert law.relative_speed(r, target, view, 3.0) == law.relative_speed(r, target, states, 3.0)
+        own = OwnState(t=3.0, p_W=p[k], v_W=[5.0, 1.0, 0.0], yaw=0.0)
+        assert law.command(own, target, view, 3.0) == law.command(own, target, states, 3.0)

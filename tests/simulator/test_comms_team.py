@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from interfaces.state import TeammateState
+from interfaces.team_states import TeamStates
 from simulator.comms import Comms
 from simulator.truth import yaw_of
 from worlds.schema import CommsSection
@@ -67,3 +68,10 @@ def test_team_states_are_built_once_per_tick_and_shared_by_its_inboxes():
     mates = comms.inbox(0, 0.35, 84)[0]
     assert quads.reads == 2
     assert mates[0].t == 0.35 and mates[0].p_W.tolist() == [34.0, -1.0, 51.0]
+
+
+def test_an_inbox_carries_its_teammates_stacked():
+    quads = _Quads()
+    mates = _comms(quads).inbox(3, 0.25, 60)[0]
+    assert isinstance(mates, TeamStates) and mates.ids.tolist() == [0, 1, 2, 4]
+    assert mates.p_W.tolist() == [s.p_W.tolist() for s in mates] and mates.t.tolist() == [0.25] * 4

@@ -94,3 +94,15 @@ def test_phase_keeping_reads_a_team_view_as_its_states():
         assert law.relative_speed(r, target, view, 3.0) == law.relative_speed(r, target, states, 3.0)
         own = OwnState(t=3.0, p_W=p[k], v_W=[5.0, 1.0, 0.0], yaw=0.0)
         assert law.command(own, target, view, 3.0) == law.command(own, target, states, 3.0)
+
+
+def test_clip_of_one_number_is_numpys():
+    from autonomy.guidance.vector_field import _clip
+
+    rng = np.random.default_rng(2)
+    xs = [*rng.normal(scale=3.0, size=200), -1.0, 1.0, 0.0, -0.0, np.inf, -np.inf]
+    for lo, hi in ((-1.0, 1.0), (0.0, 20.0), (-0.0, 20.0), (-3.0, 0.0), (-3.0, -0.0), (0.5, 1.5)):
+        for x in xs:
+            got, want = _clip(float(x), lo, hi), float(np.clip(x, lo, hi))
+            assert type(got) is float and got == want and np.signbit(got) == np.signbit(want)
+    assert np.isnan(_clip(float("nan"), 0.0, 1.0))

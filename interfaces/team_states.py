@@ -45,6 +45,10 @@ class TeamStates(tuple):
         team.p_W, team.v_W, team.t, team.ids = p_W, v_W, t, ids
         return team
 
+    def __reduce__(self) -> tuple:
+        """Pickle and copy with the stacked arrays (a tuple subclass's default would call ``__new__`` without them)."""
+        return (TeamStates, (tuple(self), self.p_W, self.v_W, self.t, self.ids))
+
     @classmethod
     def of(cls, t: float, p_W: np.ndarray, v_W: np.ndarray, yaw: Sequence[float]) -> TeamStates:
         """The states of a whole team at ``t`` (s), member ``j`` with id ``j``: (N, 3) positions ``p_W`` (m), (N, 3)

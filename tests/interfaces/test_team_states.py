@@ -71,3 +71,14 @@ def test_teammates_xy_equals_each_prediction_bit_for_bit():
     assert teammates_xy([], 1.0).shape == (0, 2)
     assert teammate_slots(mates).tolist() == [m.slot for m in mates] == [0, 3, 2, 2, 4, 1, 6]
     assert teammate_slots(team).tolist() == [0, 1, 2, 3, 5, 6, 7, 8]
+
+
+def test_a_team_pickles_and_copies_with_its_arrays():
+    import copy
+    import pickle
+
+    team = _team()[0].without(1)
+    values = lambda states: [_fields(s)[:-2] for s in states]  # noqa: E731 - a copy of an array is writeable
+    for clone in (pickle.loads(pickle.dumps(team)), copy.deepcopy(team), copy.copy(team)):
+        assert type(clone) is TeamStates and values(clone) == values(team)
+        assert clone.ids.tolist() == [0, 2, 3, 4, 5] and clone.p_W.tobytes() == team.p_W.tobytes()

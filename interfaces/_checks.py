@@ -11,6 +11,8 @@ __all__ = ["finite_number", "finite_vector"]
 
 def finite_number(owner: str, name: str, value: object) -> float:
     """``value`` as a float; raises ``ValueError`` naming ``owner.name`` unless it is one finite real number."""
+    if isinstance(value, float) and math.isfinite(value):  # the usual case, without numpy's generic dispatch
+        return float(value)
     number = None
     if not isinstance(value, (str, bytes)) and np.ndim(value) == 0:
         try:
@@ -25,7 +27,7 @@ def finite_number(owner: str, name: str, value: object) -> float:
 def finite_vector(owner: str, name: str, value: object, sizes: tuple[int, ...]) -> np.ndarray:
     """``value`` as a read-only float array of one of the lengths ``sizes``; raises ``ValueError`` naming the field."""
     arr = np.array(value, dtype=float).reshape(-1)
-    if arr.shape[0] not in sizes or not np.all(np.isfinite(arr)):
+    if arr.shape[0] not in sizes or not np.isfinite(arr).all():
         lengths = " or ".join(map(str, sizes))
         raise ValueError(f"{owner}.{name} must be a finite array of length {lengths}, got {value!r}")
     arr.setflags(write=False)

@@ -18,6 +18,7 @@ from autonomy.agent import Agent
 from autonomy.diagnostics import PlansPath
 from autonomy.fusion.measurement_sharing import DetectionMessage, relayed
 from interfaces.state import TargetEstimate, TeammateState, TrackPicture
+from interfaces.team_states import TeamStates
 from autonomy.sensing.channel import Channel, scheduled_links
 from autonomy.sensing.measurement import Detection
 from autonomy.sensing.messages import EstimateMessage, StateMessage, TrackListMessage
@@ -69,13 +70,16 @@ class Comms:
         self._heard: dict[int, dict[int, TeammateState]] = {}
         self._shared: dict[int, dict[int, TargetEstimate | TrackPicture]] = {}
         self._local: dict[int, TargetEstimate | TrackPicture | None] = {}
+        self._team: TeamStates | None = None  # every UAV's true state at self._team_tick (perfect comms)
+        self._team_tick: tuple[int, float] | None = None
 
     def positions(self) -> dict[str, np.ndarray]:
         """Every UAV's position by id: where the radio sends from and to."""
         st = self.quads.state
         return {u: st.p_W[k] for k, u in enumerate(self.uav_ids)}
 
-    def inbox(self, i: int, t: float, tick: int) -> tuple[list[TeammateState], list[TargetEstimate | TrackPicture]]:
+    def inbox(self, i: int, t: float,
+              tick: int) -> tuple[Sequence[TeammateState], list[TargetEstimate | TrackPicture]]:
         """What UAV ``i`` knows of its team at ``t`` (s): states and shared target estimates.
 
         Perfect comms: the teammates' true states and their latest local estimates. Radio: the last of each that got
@@ -83,9 +87,7 @@ class Comms:
         """
         shared = self._shared.setdefault(i, {})
         if self.channel is None:
-            st = self.quads.state
-            mates = [TeammateState(id=j, t=t, p_W=st.p_W[j], v_W=st.v_W[j], yaw=yaw_of(st.q_WB[j]))
-                     for j in range(len(self.uav_ids)) if j != i]
+            mates = self._true_states(t, tick).without(i)
             estimates = [e for j, e in self._local.items() if j != i and e is not None]
             return mates, estimates
         known = self._heard.setdefault(i, {})
@@ -103,6 +105,16 @@ class Comms:
             elif isinstance(msg, DetectionMessage):
                 self._deliver_detections(i, relayed(msg.detections, env.t_arrival - msg.t_sent))
         return [known[j] for j in sorted(known)], [shared[j] for j in sorted(shared)]
+
+    def _true_states(self, t: float, tick: int) -> TeamStates:
+        """Every UAV's true state at ``tick`` (perfect comms), built once per tick and shared by every inbox of that
+        tick: the states do not change between the agents' turns (the physics steps before them), so each agent's
+        inbox is a view of them without itself instead of N − 1 new states, and a UAV's cost does not grow with N."""
+        if self._team is None or self._team_tick != (tick, t):
+            st = self.quads.state
+            self._team = TeamStates.of(t, st.p_W, st.v_W, [yaw_of(q) for q in st.q_WB])
+            self._team_tick = (tick, t)
+        return self._team
 
     def share_estimate(self, i: int, est: TargetEstimate | None, t: float, tick: int,
                        picture: TrackPicture | None = None) -> None:

@@ -160,15 +160,19 @@ class MultiTargetTracker:
         self.team_target: int | None = None  # set by a consensus team before a step: the track it takes for the target
         self._defer: tuple[int, float] | None = None  # (target track id, step time) of a consensus step
         self._deferred: list[MeasurementLike] = []
+        self._version = 0  # bumped by every change of the tracks or beliefs (cue, step, set_information)
+        self._reports: tuple[tuple, list[TrackReport]] | None = None  # track_reports of (version, filters' times)
 
     # -- the estimator interface ---------------------------------------------------------------------------------
     def cue(self, t: float, p_W: np.ndarray, sigma_m: float) -> None:
         """The hand-off: the target is near ``p_W`` (m) at ``t`` (s), ``sigma_m`` (m) per axis."""
+        self._version += 1
         self.identity.cue(t, p_W, sigma_m)
 
     def step(self, t: float, detections: Sequence[MeasurementLike]) -> TargetEstimate | None:
         """Absorb ``detections`` (sorted by ``t_meas``) and return the target's estimate at ``t`` (s): its track's,
         or the search centre's while no track is the target (module docstring)."""
+        self._version += 1
         self._step_detections = {}
         for t_meas, scan in self._scans(detections):
             self._drop_lost(t_meas)
@@ -234,6 +238,7 @@ class MultiTargetTracker:
         track = self._track(self._target)
         if track is None:
             raise ValueError("set_information needs a target track")
+        self._version += 1
         track.filter.set_information(info)
 
     def current_estimate(self) -> TargetEstimate | None:
@@ -259,10 +264,17 @@ class MultiTargetTracker:
         return list(self._step_detections.get(track_id, ()))
 
     def track_reports(self) -> list[TrackReport]:
-        """Every live track at its filter's time, with its target probability and own class evidence."""
-        return [TrackReport(track_id=tr.track_id, estimate=self._estimate(tr),
-                            target_probability=min(1.0, max(0.0, self.identity.probability(tr.track_id))),
-                            evidence=tr.evidence, confirmed=tr.confirmed) for tr in self.tracks]
+        """Every live track at its filter's time, with its target probability and own class evidence.
+
+        Made once per change of the tracks (a step's reports are read for sharing, recording and metrics): kept
+        while no :meth:`step`, :meth:`cue` or :meth:`set_information` came and no filter moved in time."""
+        key = (self._version, tuple(tr.filter.t for tr in self.tracks))
+        if self._reports is None or self._reports[0] != key:
+            self._reports = (key, [TrackReport(
+                track_id=tr.track_id, estimate=self._estimate(tr),
+                target_probability=min(1.0, max(0.0, self.identity.probability(tr.track_id))),
+                evidence=tr.evidence, confirmed=tr.confirmed) for tr in self.tracks])
+        return list(self._reports[1])
 
     # -- a scan --------------------------------------------------------------------------------------------------
     def _scans(self, detections: Sequence[MeasurementLike]) -> list[tuple[float, list]]:

@@ -86,9 +86,13 @@ def sample_road(road: RoadLike, s: np.ndarray, offset: float) -> tuple[np.ndarra
         (M,) signed curvatures of the offset curve (1/m).
     """
     s = np.asarray(s, dtype=float)
-    xy = _vectorised(road.point, s).reshape(len(s), 2)
-    h = _vectorised(road.heading, s).reshape(len(s))
-    k = _vectorised(road.curvature, s).reshape(len(s))
+    both = getattr(road, "sample", None)  # a road that evaluates all three at once (worlds.roads.road.Road)
+    if both is not None:
+        xy, h, k = both(s)
+    else:
+        xy = _vectorised(road.point, s).reshape(len(s), 2)
+        h = _vectorised(road.heading, s).reshape(len(s))
+        k = _vectorised(road.curvature, s).reshape(len(s))
     n = np.stack([-np.sin(h), np.cos(h)], axis=1)
     denom = np.maximum(1.0 - offset * k, 1e-3)
     return xy + offset * n, h, k / denom

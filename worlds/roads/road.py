@@ -196,6 +196,13 @@ class Road:
             x, y = x - lateral * np.sin(th), y + lateral * np.cos(th)
         return np.stack([x, y], axis=-1)
 
+    def sample(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, 2) centre-line points, (M,) headings and (M,) curvatures at arc lengths ``s`` (an array): what
+        :meth:`point`, :meth:`heading` and :meth:`curvature` give, from one evaluation of the spline instead of
+        three."""
+        x, y, th, ka, _ = self._interp(np.asarray(s, dtype=float))
+        return np.stack([x, y], axis=-1), np.arctan2(np.sin(th), np.cos(th)), ka
+
     def tangent(self, s: float | np.ndarray) -> np.ndarray:
         """Unit tangent (direction of travel) at arc length ``s``; (2,) or (M, 2)."""
         if np.ndim(s) == 0:

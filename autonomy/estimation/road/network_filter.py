@@ -154,7 +154,7 @@ class RoadNetworkFilter(Filter):
         if len(self.hypotheses) == 1:
             return self.hypotheses[0].filter.P
         w = self.weights
-        x = self.x
+        x = sum(wi * h.filter.x for wi, h in zip(w, self.hypotheses, strict=True))  # :attr:`x` on the same weights
         P = np.zeros_like(self.unconstrained.P)
         for wi, h in zip(w, self.hypotheses, strict=True):
             d = h.filter.x - x

@@ -22,7 +22,7 @@ from __future__ import annotations
 import statistics
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pybullet as p
@@ -50,6 +50,8 @@ class FloorMeasure:
         Wall time of the run's setup (world, solvers, scene) (s).
     floor_cpu_s, floor_wall_s : float
         CPU and wall time of the floor's stepping, its assembly excluded (s).
+    phases_wall_s : dict[str, float]
+        The run's ``wall_time_breakdown_s`` (setup, each phase of the tick, other) (s).
     """
 
     sim_s: float
@@ -58,6 +60,7 @@ class FloorMeasure:
     setup_wall_s: float
     floor_cpu_s: float
     floor_wall_s: float
+    phases_wall_s: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("sim_s", "world_cpu_s", "world_wall_s", "floor_cpu_s", "floor_wall_s"):
@@ -150,7 +153,8 @@ def measure_against_floor(world: str, overrides: tuple[str, ...] = (), duration_
     floor_cpu, floor_wall = floor_seconds(loaded, duration, seed)
     return FloorMeasure(sim_s=float(outcome.metrics["sim_time_s"]), world_cpu_s=world_cpu, world_wall_s=world_wall,
                         setup_wall_s=float(outcome.metrics["wall_time_breakdown_s"]["setup"]),
-                        floor_cpu_s=floor_cpu, floor_wall_s=floor_wall)
+                        floor_cpu_s=floor_cpu, floor_wall_s=floor_wall,
+                        phases_wall_s=dict(outcome.metrics["wall_time_breakdown_s"]))
 
 
 def floor_records(prefix: str, runs: list[FloorMeasure]) -> list[BenchRecord]:

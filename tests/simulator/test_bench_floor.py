@@ -37,6 +37,7 @@ def test_records_are_medians_of_the_per_repeat_ratios():
 def test_a_tiny_world_runs_slower_than_its_floor():
     m = measure_against_floor("demo", duration_s=1.0, seed=3)
     assert m.sim_s == 1.0
+    assert set(m.phases_wall_s) == {"setup", "vehicles", "physics", "sensors", "autonomy", "record", "other"}
     assert m.cpu_ratio == pytest.approx(m.floor_cpu_s / m.world_cpu_s, rel=1e-12)
     assert 0.0 < m.cpu_ratio <= 1.5
     assert 0.0 < m.wall_ratio <= 1.5

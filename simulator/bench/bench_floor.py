@@ -4,17 +4,18 @@ PyBullet alone.
 The floor of a world is the real-time factor of the same scene — its buildings, road surface, UAV bodies, cars and
 decoys, built by the run's own assembly (:func:`simulator.prepare.build_assembly`) — stepped by
 ``p.stepSimulation`` alone for the same number of ticks: no drivers, controllers, sensors, autonomy or record. The
-cars' motors stay at the targets the assembly leaves (braked at rest: a car driven straight at 8 m/s costs the same
-73 us per step in ``road_standoff``), kinematic cars' boxes stay where they spawned, and each UAV is held up by one
-constant force (its weight, one ``applyExternalForce`` per UAV and tick, the least PyBullet needs to keep the same
-bodies in the air). The world runs first (:func:`simulator.engine.run_world`, setup included, as ``skytrack run``
+cars' motors stay at the targets the assembly leaves (braked at rest: in ``road_standoff`` a step costs the same
+73 us with the car driven straight at 8 m/s), kinematic cars' boxes stay where they spawned, and each UAV is held up
+by one constant force (its weight, one ``applyExternalForce`` per UAV and tick, the least PyBullet needs to keep the
+same bodies in the air). The world runs first (:func:`simulator.engine.run_world`, setup included, as ``skytrack run``
 would), then its floor, in the same call, so both see the same load of a shared machine.
 
 The ratio world / floor is 1 when everything the simulator adds to PyBullet's step costs nothing; 0.5 when it costs
 as much as the step. The headline figures are per second of this process's CPU time (``time.process_time``: waiting
 for a core on a shared machine is not counted), each with its wall-time twin. Note that the floor steps in a tight
 loop, where Bullet's data stay in the CPU caches; between the run loop's other phases the same step costs ≈ 1.5x more
-(``road_standoff``: 67 us in the floor's loop, 104 us with the vehicles' code between steps).
+(``road_standoff``, 60 s: 67 us per step in the floor's loop, 104 us with the vehicles' controllers and drivers
+between the steps, 107 us with 8 MB of unrelated memory traffic between them instead).
 """
 
 from __future__ import annotations

@@ -242,7 +242,8 @@ class RoadNetworkFilter(Filter):
     def _new_filter(self, segments: tuple, index: int, x: np.ndarray, P: np.ndarray, t: float,
                     constrained_t: float = -np.inf) -> RoadConstrainedFilter:
         f = make_road_filter(self.config.variant, self.unconstrained.model, x, P, t,
-                             cursor=SegmentCursor(segments, index), lanes=self.roadmap.lanes,
+                             cursor=SegmentCursor(segments, index),
+                             lanes={g.road_id: self.roadmap.lane(g.road_id) for g in segments},
                              params=self.config.constraint, target_height=self.unconstrained.target_height,
                              stage2=self.config.ecukf_stage2)
         f._constrained_t = constrained_t

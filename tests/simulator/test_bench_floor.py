@@ -34,7 +34,7 @@ def test_records_are_medians_of_the_per_repeat_ratios():
     assert recs["w_cpu_rtf"].value == 2.0  # median of 2, 2.5, 1
 
 
-def test_a_tiny_world_runs_slower_than_its_floor():
+def test_a_tiny_worlds_ratio_is_made_of_its_run_and_its_floor():
     m = measure_against_floor("demo", duration_s=1.0, seed=3)
     assert m.sim_s == 1.0
     assert set(m.phases_wall_s) == {"setup", "vehicles", "physics", "sensors", "autonomy", "record", "other"}

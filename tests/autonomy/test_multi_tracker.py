@@ -184,3 +184,26 @@ def test_two_tracks_on_one_car_are_merged():
     tr.identity.confirmed(99, orig.filter.t, orig.filter.x[[0, 2]], np.eye(2), 0.0)
     tr.step(5.0, [_precise(car + rng.normal(0, 0.3, 2), 5.0)])
     assert tr.merges == 1 and [x.track_id for x in tr.tracks if x.confirmed] == [orig.track_id]
+
+
+def test_track_reports_are_made_once_per_step_and_follow_every_change():
+    """Reports read twice after a step are the same objects; a step, a filter moved in time from outside, or a
+    cue makes them anew, equal to reports computed from the tracks directly."""
+    tr = _tracker()
+    for k in range(4):
+        t = 0.5 * k
+        tr.step(t, [_det([10.0 * t, 0.0], t), _det([0.0, 200.0 + 5.0 * t], t)])
+    first, again = tr.track_reports(), tr.track_reports()
+    assert len(first) == 2 and first is not again and all(a is b for a, b in zip(first, again, strict=True))
+    tr.step(2.0, [_det([20.0, 0.0], 2.0)])
+    after = tr.track_reports()
+    assert all(a is not b for a, b in zip(first, after, strict=True))
+    assert [r.estimate.t for r in after] == [x.filter.t for x in tr.tracks]
+    moved = tr.tracks[1]
+    moved.filter.predict(moved.filter.t + 1.0)  # from outside the tracker: its time changes, so do its reports
+    fresh = tr.track_reports()
+    assert fresh[1].estimate.t == moved.filter.t
+    np.testing.assert_array_equal(fresh[1].estimate.p_W, moved.filter.x[[0, 2]])
+    tr.cue(2.0, np.array([20.0, 0.0]), 5.0)
+    cued = tr.track_reports()
+    assert all(a is not b for a, b in zip(fresh, cued, strict=True))

@@ -141,3 +141,14 @@ def test_covariance_stays_symmetric_positive_definite(seed, variant, stage2, mod
                              p_sensor_W=np.array([400.0, 100.0, 100.0])))
         np.testing.assert_allclose(f.P, f.P.T, atol=1e-9)
         assert np.linalg.eigvalsh(f.P).min() > 0.0
+
+
+def test_a_road_filter_keeps_the_lanes_of_its_path_and_refuses_a_path_without_them():
+    rng = np.random.default_rng(4)
+    x, P = start(rng)
+    lanes = {"r": (OFFSET, SIGMA_L), "elsewhere": (0.0, 2.0)}
+    f = ECUKF(MODEL, x, P, 0.0, cursor=straight_cursor(), lanes=lanes)
+    assert f.lanes == {"r": (OFFSET, SIGMA_L)}
+    with pytest.raises(ValueError, match=r"lanes must give \(offset, sigma\) for every road on the path, "
+                                         r"missing \['r'\]"):
+        MAEKF(MODEL, x, P, 0.0, cursor=straight_cursor(), lanes={"elsewhere": (0.0, 2.0)})

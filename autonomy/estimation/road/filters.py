@@ -62,11 +62,12 @@ class RoadConstrainedFilter(GaussianFilter):
 
     def _setup_road(self, cursor: SegmentCursor, lanes: Mapping[str, tuple[float, float]],
                     params: RoadConstraintParams) -> None:
-        missing = {g.road_id for g in cursor.segments} - set(lanes)
+        roads = {g.road_id for g in cursor.segments}
+        missing = {rid for rid in roads if rid not in lanes}
         if missing:
             raise ValueError(f"lanes must give (offset, sigma) for every road on the path, missing {sorted(missing)}")
         self.cursor = cursor
-        self.lanes = dict(lanes)
+        self.lanes = {rid: lanes[rid] for rid in roads}  # the path's roads (a cursor's path is fixed): what it reads
         self.params = params
         self._ip, vel = state_indices(self.layout)
         self._ip = list(self._ip[:2])

@@ -154,7 +154,7 @@ class RoadNetworkFilter(Filter):
         if len(self.hypotheses) == 1:
             return self.hypotheses[0].filter.P
         w = self.weights
-        x = self.x
+        x = sum(wi * h.filter.x for wi, h in zip(w, self.hypotheses, strict=True))  # :attr:`x` on the same weights
         P = np.zeros_like(self.unconstrained.P)
         for wi, h in zip(w, self.hypotheses, strict=True):
             d = h.filter.x - x
@@ -242,7 +242,8 @@ class RoadNetworkFilter(Filter):
     def _new_filter(self, segments: tuple, index: int, x: np.ndarray, P: np.ndarray, t: float,
                     constrained_t: float = -np.inf) -> RoadConstrainedFilter:
         f = make_road_filter(self.config.variant, self.unconstrained.model, x, P, t,
-                             cursor=SegmentCursor(segments, index), lanes=self.roadmap.lanes,
+                             cursor=SegmentCursor(segments, index),
+                             lanes={g.road_id: self.roadmap.lane(g.road_id) for g in segments},
                              params=self.config.constraint, target_height=self.unconstrained.target_height,
                              stage2=self.config.ecukf_stage2)
         f._constrained_t = constrained_t

@@ -158,21 +158,21 @@ class MultiTargetTracker:
         self._step_detections: dict[int, list] = {}
         self._last_t = 0.0
         self.team_target: int | None = None  # set by a consensus team before a step: the track it takes for the target
+        # the last track_reports() and the tracks (ids, filter times) they were made of; None after any change
+        self._reports: tuple[tuple, list[TrackReport]] | None = None
         self._defer: tuple[int, float] | None = None  # (target track id, step time) of a consensus step
         self._deferred: list[MeasurementLike] = []
-        self._version = 0  # bumped by every change of the tracks or beliefs (cue, step, set_information)
-        self._reports: tuple[tuple, list[TrackReport]] | None = None  # track_reports of (version, filters' times)
 
     # -- the estimator interface ---------------------------------------------------------------------------------
     def cue(self, t: float, p_W: np.ndarray, sigma_m: float) -> None:
         """The hand-off: the target is near ``p_W`` (m) at ``t`` (s), ``sigma_m`` (m) per axis."""
-        self._version += 1
+        self._reports = None
         self.identity.cue(t, p_W, sigma_m)
 
     def step(self, t: float, detections: Sequence[MeasurementLike]) -> TargetEstimate | None:
         """Absorb ``detections`` (sorted by ``t_meas``) and return the target's estimate at ``t`` (s): its track's,
         or the search centre's while no track is the target (module docstring)."""
-        self._version += 1
+        self._reports = None
         self._step_detections = {}
         for t_meas, scan in self._scans(detections):
             self._drop_lost(t_meas)
@@ -216,6 +216,7 @@ class MultiTargetTracker:
         finally:
             deferred_for = self._defer[0] if self._defer is not None else None
             self._defer = None
+            self._reports = None  # the deferred detections and the prediction below change the tracks again
         track = self._track(self._target)
         old = self._track(deferred_for)
         if self._deferred and (track is None or track is not old):
@@ -238,7 +239,7 @@ class MultiTargetTracker:
         track = self._track(self._target)
         if track is None:
             raise ValueError("set_information needs a target track")
-        self._version += 1
+        self._reports = None
         track.filter.set_information(info)
 
     def current_estimate(self) -> TargetEstimate | None:
@@ -266,9 +267,11 @@ class MultiTargetTracker:
     def track_reports(self) -> list[TrackReport]:
         """Every live track at its filter's time, with its target probability and own class evidence.
 
-        Made once per change of the tracks (a step's reports are read for sharing, recording and metrics): kept
-        while no :meth:`step`, :meth:`cue` or :meth:`set_information` came and no filter moved in time."""
-        key = (self._version, tuple(tr.filter.t for tr in self.tracks))
+        Made once per change of the tracker (a step, a consensus posterior, a cue) and handed out again until the
+        next: fusion, the team's picture, the record and the metrics each read them after every step, and a road
+        filter's mixture estimate costs tens of microseconds per track.
+        """
+        key = tuple((tr.track_id, tr.filter.t) for tr in self.tracks)
         if self._reports is None or self._reports[0] != key:
             self._reports = (key, [TrackReport(
                 track_id=tr.track_id, estimate=self._estimate(tr),

@@ -5,10 +5,10 @@ ground_clearance), its floor at ``ground_clearance``, its base frame at the cent
 ``cog_height`` above the ground). Sensors' occlusion raycasts, the camera's colour detector (base link -1, as on the
 physics car) and contact checks therefore see the same shape as the physics car's body.
 
-The body has mass 0 and maximal coordinates (a plain rigid body, not a one-link multibody): static to Bullet, and
-cheap — PyBullet's step costs about 0.13 ms per 1000 such boxes against 0.8 ms for 1000 fixed multibodies, which
-city traffic would otherwise pay every physics tick. Static to Bullet means: gravity and contacts never move it and it adds no rows to the
-constraint solver unless a dynamic body (a UAV, a physics car) touches it, which then meets it as it would a
+The body has mass 0 and maximal coordinates (a plain rigid body, not a one-link multibody): PyBullet's step costs
+about 0.13 ms per 1000 such boxes against 0.8 ms for 1000 fixed multibodies, which city traffic would otherwise pay
+every physics tick. It is static to Bullet: gravity and contacts never move it and it adds no rows to the constraint
+solver unless a dynamic body (a UAV, a physics car) touches it, which then meets it as it would a
 building. :meth:`CarBoxBody.place` teleports it; rays cast afterwards see it at once (no physics step needed).
 """
 

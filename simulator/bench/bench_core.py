@@ -138,12 +138,12 @@ def _world_records(prefix: str, target: float | None, physics: tuple[float, ...]
 def bench_world_rtf() -> list[BenchRecord]:
     """Closed-loop real-time factors of shipped worlds run for their own duration (median of 3 runs each): the demo
     world (2 quadrotors, 1 car, radars, EKF, vector-field guidance; 60 s), paper 002's ``road_standoff`` (2
-    quadrotors, 1 car in a town, radars, EKF, fusion, NMPC at 2 Hz; 120 s) and ``helsinki_chase``
-    without its cameras (3 quadrotors, radars, ECUKF on the city's roads, covariance intersection, NMPC among the
-    buildings, a building-blocked radio; 120 s). No absolute targets: they were retired for ratios to the physics
-    floor measured in the same call (``bench_floor``: ``*_floor_ratio``). ``*_loop_rtf``: the same runs without
-    their setup (world, solvers and scene: ≈ 1-1.5 s per run with warm caches; ``wall_time_breakdown_s`` of the
-    metrics says where the rest goes). ``*_autonomy_bound_rtf``: the simulated time over the wall time of the agents' phase alone
+    quadrotors, 1 car in a town, radars, EKF, fusion, NMPC at 2 Hz; 120 s) and ``helsinki_chase`` without its
+    cameras (3 quadrotors, radars, ECUKF on the city's roads, covariance intersection, NMPC among the buildings, a
+    building-blocked radio; 120 s). No absolute targets: they were retired for ratios to the physics floor measured
+    in the same call (``bench_floor``: ``*_floor_ratio``). ``*_loop_rtf``: the same runs without their setup (world,
+    solvers and scene: ≈ 1-1.5 s per run with warm caches; ``wall_time_breakdown_s`` of the metrics says where the
+    rest goes). ``*_autonomy_bound_rtf``: the simulated time over the wall time of the agents' phase alone
     (estimation, fusion, guidance, the radio messages they send): the real-time factor the world could reach if its
     physics, vehicles, sensors and records cost nothing; a target above it cannot be met without a cheaper autonomy.
 

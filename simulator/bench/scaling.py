@@ -1,0 +1,150 @@
+"""How a run's cost grows with traffic and with the team: ``python -m simulator.bench.scaling --out docs/scaling``.
+
+Runs ``helsinki_traffic_builtin`` (three radar UAVs with EKF, covariance intersection and vector-field standoff
+tracking a physics car across the Helsinki extract) with 0 / 50 / 200 / 1000 built-in traffic cars, the same with SUMO
+traffic (200 / 1000 vehicles, when SUMO is installed), and with 1 / 10 / 50 UAVs among 200 built-in cars, and writes
+``scaling.md`` (the table: CPU real-time factor of the loop, setup excluded, and the wall seconds of each phase of the
+tick per simulated second) and ``scaling.png`` beside it. Every figure comes from the runs of the command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import math
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+__all__ = ["main", "sweep"]
+
+WORLD = "helsinki_traffic_builtin"
+CARS = (0, 50, 200, 1000)
+SUMO_CARS = (200, 1000)
+UAVS = (1, 10, 50)
+PHASES = ("vehicles", "physics", "sensors", "autonomy", "record", "other")
+
+
+def _world(cars: int, engine: str, uavs: int | None, duration_s: float) -> dict[str, Any]:
+    from worlds.loader import shipped_worlds
+
+    raw = yaml.safe_load(shipped_worlds()[WORLD].read_text(encoding="utf-8"))
+    raw["traffic"] = {"engine": engine, "cars": cars, "rate_hz": 20 if engine == "builtin" else 5}
+    raw["sim"]["duration_s"] = duration_s
+    if uavs is not None:
+        base, out = raw["uavs"], []
+        for k in range(uavs):
+            u = copy.deepcopy(base[k % len(base)])
+            a = 2 * math.pi * k / uavs
+            z = 80.0 + 2.0 * (k % 15)
+            u["id"] = f"uav{k + 1}"
+            u["initial"] = {"position": [180.0 + 250.0 * math.cos(a), -360.0 + 250.0 * math.sin(a), z],
+                            "yaw_deg": math.degrees(a) + 90.0}
+            u["autonomy"]["guidance"]["altitude"] = z
+            out.append(u)
+        raw["uavs"] = out
+    return raw
+
+
+def _run(raw: dict[str, Any]) -> dict[str, float]:
+    """One run: its CPU real-time factor with the setup left out, and its phases' wall seconds per simulated s."""
+    from simulator.engine import RunOptions, run_world
+    from worlds.loader import load_world
+
+    marks: dict[str, float] = {}
+
+    def at_tick(tick: int) -> None:
+        if tick == 1:
+            marks["cpu"] = time.process_time()
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "world.yaml"
+        path.write_text(yaml.safe_dump(raw, sort_keys=False), encoding="utf-8")
+        out = run_world(load_world(path), RunOptions(out_dir=Path(tmp) / "run", plots=False, on_tick=at_tick))
+        cpu = time.process_time() - marks["cpu"]
+        if out.status != "completed":
+            raise RuntimeError(f"scaling run ended {out.status}: {out.error}")
+        metrics = json.loads((Path(tmp) / "run" / "metrics.json").read_text(encoding="utf-8"))
+    sim = float(raw["sim"]["duration_s"])
+    row = {"cpu_rtf": sim / max(cpu, 1e-9)}
+    row.update({p: metrics["wall_time_breakdown_s"].get(p, 0.0) / sim for p in PHASES})
+    return row
+
+
+def sweep(duration_s: float = 15.0, uav_duration_s: float = 10.0) -> list[dict[str, Any]]:
+    """Every configuration of the module docstring, one run each (seed of the world file)."""
+    from vehicles.sumo import sumo_available
+
+    rows = []
+    for n in CARS:
+        rows.append({"sweep": "cars", "engine": "builtin", "cars": n, "uavs": 3, **_run(_world(n, "builtin", None,
+                                                                                                 duration_s))})
+    if sumo_available():
+        for n in SUMO_CARS:
+            rows.append({"sweep": "cars", "engine": "sumo", "cars": n, "uavs": 3,
+                         **_run(_world(n, "sumo", None, duration_s))})
+    for k in UAVS:
+        rows.append({"sweep": "uavs", "engine": "builtin", "cars": 200, "uavs": k,
+                     **_run(_world(200, "builtin", k, uav_duration_s))})
+    return rows
+
+
+def _table(rows: list[dict[str, Any]]) -> str:
+    head = "| traffic | cars | UAVs | CPU real-time factor | " + " | ".join(f"{p} s/s" for p in PHASES) + " |"
+    rule = "|---|---:|---:|---:|" + "---:|" * len(PHASES)
+    body = [f"| {r['engine']} | {r['cars']} | {r['uavs']} | {r['cpu_rtf']:.2f}x | "
+            + " | ".join(f"{r[p]:.3f}" for p in PHASES) + " |" for r in rows]
+    return "\n".join([head, rule, *body])
+
+
+def _plot(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    for engine, style in (("builtin", "o-"), ("sumo", "s--")):
+        sel = [r for r in rows if r["sweep"] == "cars" and r["engine"] == engine]
+        if sel:
+            a.plot([max(r["cars"], 1) for r in sel], [r["cpu_rtf"] for r in sel], style, label=engine)
+    a.set(xscale="log", yscale="log", xlabel="traffic cars (0 drawn at 1)", ylabel="CPU real-time factor",
+          title="3 radar UAVs, Helsinki")
+    a.axhline(1.0, color="grey", lw=0.8)
+    a.legend()
+    sel = [r for r in rows if r["sweep"] == "uavs"]
+    b.plot([r["uavs"] for r in sel], [r["cpu_rtf"] for r in sel], "o-")
+    b.set(xscale="log", yscale="log", xlabel="UAVs", ylabel="CPU real-time factor", title="among 200 built-in cars")
+    b.axhline(1.0, color="grey", lw=0.8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("docs/scaling"))
+    ap.add_argument("--duration", type=float, default=15.0, help="simulated seconds of each traffic run")
+    args = ap.parse_args(argv)
+    rows = sweep(args.duration)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "scaling.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
+    _plot(rows, args.out / "scaling.png")
+    (args.out / "scaling.md").write_text(
+        "# How cost grows with traffic and with the team\n\n"
+        f"Made by `python -m simulator.bench.scaling --out {args.out}` ({time.strftime('%Y-%m-%d')}, "
+        "2-core machine): helsinki_traffic_builtin (three radar UAVs, EKF, covariance intersection, vector field, "
+        f"one physics target car) for {args.duration:g} s per traffic run and 10 s per team run, one run each. "
+        "CPU real-time factor: simulated time over the loop's CPU time (setup left out). The phase columns are the "
+        "tick's wall seconds per simulated second (`wall_time_breakdown_s`).\n\n"
+        + _table(rows) + "\n\n![real-time factor against cars and UAVs](scaling.png)\n", encoding="utf-8")
+    print(_table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -4,7 +4,7 @@ Each UAV with a multi-target tracker shares a :class:`~interfaces.state.TrackPic
 target probabilities and the class evidence of its own sensors). At a fusion step, for each teammate's picture no
 older than ``max_age_s``:
 
-1. every track is predicted to the fusion time (constant velocity, :func:`~.track_fusion.predict_estimate`);
+1. every track is predicted to the fusion time (constant velocity, :func:`~.track_fusion.predict_estimates`);
 2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
    does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
@@ -35,7 +35,7 @@ from scipy.special import gammaincinv
 from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-from .track_fusion import fuse_estimates, predict_estimate
+from .track_fusion import fuse_estimates, predict_estimates
 
 __all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks", "track_picture"]
 
@@ -128,7 +128,7 @@ class TeamTrackFusion:
         """The team's target at ``t`` (s) from one's own confirmed tracks ``own`` (``own_target`` the one taken for
         the target; ``local`` one's own target estimate) and the teammates' ``pictures`` (module docstring)."""
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
-        own_est = [predict_estimate(r.estimate, t, self.q) for r in mine]
+        own_est = predict_estimates([r.estimate for r in mine], t, self.q)
         pooled = np.array([r.target_probability for r in mine], dtype=float)
         own_none = max(0.0, 1.0 - float(pooled.sum()))
         none = 0.0  # the members' pooled "in no track", one's own share added after the loop
@@ -141,7 +141,7 @@ class TeamTrackFusion:
             members += 1
             none += max(0.0, 1.0 - sum(r.target_probability for r in pic.tracks))
             theirs = [r for r in pic.tracks if r.estimate.P is not None]
-            their_est = [predict_estimate(r.estimate, t, self.q) for r in theirs]
+            their_est = predict_estimates([r.estimate for r in theirs], t, self.q)
             pairs = associate_tracks(own_est, their_est, self.threshold)
             self.associated += len(pairs)
             taken = set()

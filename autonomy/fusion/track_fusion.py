@@ -18,7 +18,7 @@ import numpy as np
 from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-__all__ = ["TrackFusionConfig", "TrackFusion", "fuse_estimates", "predict_estimate"]
+__all__ = ["TrackFusionConfig", "TrackFusion", "fuse_estimates", "predict_estimate", "predict_estimates"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -65,6 +65,34 @@ def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
         Q[n:, n:] = abs(dt) * q * np.eye(n)
         P = F @ est.P @ F.T + Q
     return TargetEstimate(t=t, p_W=est.p_W + dt * est.v_W, v_W=est.v_W, P=P)
+
+
+def predict_estimates(ests: Sequence[TargetEstimate], t: float, q: float) -> list[TargetEstimate]:
+    """:func:`predict_estimate` of every estimate, the covariances in one stacked product: the same numbers (the
+    stacked matrix product multiplies slice by slice as the single one does, and each Q is built in the same float
+    operations), for a team's track pictures of tens of tracks each."""
+    todo = [k for k, e in enumerate(ests) if t - e.t != 0.0 and e.P is not None and e.p_W.size == 2]
+    out = list(ests)
+    if len(todo) < 2:
+        return [predict_estimate(e, t, q) for e in ests]
+    dts = [t - ests[k].t for k in todo]
+    F = np.tile(np.eye(4), (len(todo), 1, 1))
+    F[:, 0, 2] = F[:, 1, 3] = dts
+    Q = np.zeros((len(todo), 4, 4))
+    for m, dt in enumerate(dts):
+        a, b, c = abs(dt) ** 3 / 3 * q, dt ** 2 / 2 * q, abs(dt) * q
+        Q[m, 0, 0] = Q[m, 1, 1] = a
+        Q[m, 0, 2] = Q[m, 1, 3] = Q[m, 2, 0] = Q[m, 3, 1] = b
+        Q[m, 2, 2] = Q[m, 3, 3] = c
+    P = F @ np.stack([ests[k].P for k in todo]) @ F.transpose(0, 2, 1) + Q
+    for m, k in enumerate(todo):
+        e = ests[k]
+        out[k] = TargetEstimate(t=t, p_W=e.p_W + dts[m] * e.v_W, v_W=e.v_W, P=P[m])
+    done = set(todo)
+    for k, e in enumerate(ests):
+        if k not in done:
+            out[k] = predict_estimate(e, t, q)
+    return out
 
 
 def fuse_estimates(method: str, t: float, parts: Sequence[TargetEstimate]) -> TargetEstimate:

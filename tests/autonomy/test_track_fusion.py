@@ -54,3 +54,23 @@ def test_covariance_intersection_never_claims_more_than_the_best_input():
 def test_config_validation():
     with pytest.raises(ValueError, match="max_age_s"):
         TrackFusionConfig(max_age_s=0)
+
+
+def test_predicting_many_estimates_at_once_gives_each_ones_numbers_bit_for_bit():
+    from autonomy.fusion.track_fusion import predict_estimate, predict_estimates
+    from interfaces.state import TargetEstimate
+
+    rng = np.random.default_rng(5)
+    ests = []
+    for k in range(40):
+        a = rng.normal(size=(4, 4))
+        P = a @ a.T + np.eye(4)
+        ests.append(TargetEstimate(t=float(rng.uniform(0, 10)), p_W=rng.normal(size=2) * 100,
+                                   v_W=rng.normal(size=2) * 10, P=P if k % 7 else None))
+    ests.append(TargetEstimate(t=12.5, p_W=np.zeros(2), v_W=np.ones(2), P=np.eye(4)))  # dt = 0: itself
+    batch = predict_estimates(ests, 12.5, 0.7)
+    for e, b in zip(ests, batch, strict=True):
+        one = predict_estimate(e, 12.5, 0.7)
+        assert b.t == one.t and np.array_equal(b.p_W, one.p_W) and np.array_equal(b.v_W, one.v_W)
+        assert (b.P is None and one.P is None) or np.array_equal(b.P, one.P)
+    assert batch[-1] is ests[-1]

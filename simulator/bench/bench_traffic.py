@@ -8,9 +8,7 @@ single-threaded, and on a shared machine CPU time is what other load disturbs le
 from __future__ import annotations
 
 import statistics
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 import pybullet as p
@@ -108,27 +106,26 @@ def bench_traffic_car_tick() -> list[BenchRecord]:
 
 
 def _world_rtf(world: str, seconds: float) -> tuple[float, float]:
-    """(CPU, wall) real-time factor of ``seconds`` of a shipped world, setup excluded (the run's own breakdown)."""
-    import json
+    """(CPU, wall) real-time factor of ``seconds`` of a shipped world, from its first tick to the end of its run
+    directory (setup and plots left out; :func:`simulator.bench.scaling.loop_rtf`)."""
+    import yaml
 
-    from simulator.api import run
+    from simulator.bench.scaling import loop_rtf
+    from worlds.loader import shipped_worlds
 
-    with tempfile.TemporaryDirectory() as tmp:
-        c0, w0 = time.process_time(), time.perf_counter()
-        res = run(world, duration=seconds, out_dir=Path(tmp) / "run")
-        cpu, wall = time.process_time() - c0, time.perf_counter() - w0
-        if res.status != "completed":
-            raise RuntimeError(f"{world}: the benchmark run ended {res.status}")
-        setup = json.loads((Path(tmp) / "run" / "metrics.json").read_text())["wall_time_breakdown_s"]["setup"]
-    return seconds / max(cpu - setup, 1e-9), seconds / max(wall - setup, 1e-9)
+    raw = yaml.safe_load(shipped_worlds()[world].read_text(encoding="utf-8"))
+    raw["sim"]["duration_s"] = seconds
+    row = loop_rtf(raw)
+    return row["cpu_rtf"], row["rtf"]
 
 
 @benchmark("city_traffic", produces=("city_traffic_cpu_rtf_200cars", "city_traffic_rtf_200cars",
                                      "city_traffic_sumo_cpu_rtf_1000cars", "city_traffic_sumo_rtf_1000cars"))
 def bench_city_traffic() -> list[BenchRecord]:
-    """Closed-loop real-time factor (CPU time, setup excluded; wall-time twin beside it) of helsinki_traffic_builtin
-    (three radar UAVs with EKF and vector field tracking a physics car among 200 built-in traffic cars, 30 s) and of
-    helsinki_traffic (the same among 1000 SUMO vehicles, 20 s; left out when SUMO is not installed)."""
+    """Closed-loop real-time factor (CPU time, setup and plots left out; wall twin beside it) of
+    helsinki_traffic_builtin (three radar UAVs with EKF and vector field tracking a physics car among 200 built-in
+    traffic cars, 30 s) and of helsinki_traffic (the same among 1000 SUMO vehicles, 20 s; left out when SUMO is not
+    installed)."""
     cpu, wall = _world_rtf("helsinki_traffic_builtin", 30.0)
     out = [BenchRecord(name="city_traffic_cpu_rtf_200cars", value=cpu, unit="x", target=5.0, better="higher"),
            BenchRecord(name="city_traffic_rtf_200cars", value=wall, unit="x", better="higher")]

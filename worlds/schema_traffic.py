@@ -126,4 +126,6 @@ class TrafficSpec(Strict):
         if "rate_hz" in self.driver.model_fields_set and self.driver.rate_hz != self.rate_hz:
             raise ValueError(f"traffic.driver.rate_hz ({self.driver.rate_hz}) differs from traffic.rate_hz "
                              f"({self.rate_hz}): give the rate once, as traffic.rate_hz")
+        if self.driver.rate_hz != self.rate_hz:  # the resolved world carries the one rate in both places
+            self.driver = DriverSpec(**self.driver.model_dump(exclude_unset=True) | {"rate_hz": self.rate_hz})
         return self

@@ -13,6 +13,7 @@ import time
 import numpy as np
 import pybullet as p
 
+from simulator.bench.bench_cars import _grid
 from simulator.bench.registry import BenchRecord, benchmark
 from vehicles.car.driver import Driver
 from vehicles.car.driver_config import DriverConfig
@@ -31,13 +32,6 @@ CARS = 200
 REPEATS = 3
 
 
-def _grid(n: int = 12, spacing: float = 150.0) -> RoadNetwork:
-    nodes = {f"{i}_{j}": [i * spacing, j * spacing] for i in range(n) for j in range(n)}
-    streets = [{"id": f"h{i}_{j}", "nodes": [f"{i}_{j}", f"{i + 1}_{j}"]} for i in range(n - 1) for j in range(n)]
-    streets += [{"id": f"v{i}_{j}", "nodes": [f"{i}_{j}", f"{i}_{j + 1}"]} for i in range(n) for j in range(n - 1)]
-    return RoadNetwork.from_spec({"nodes": nodes, "streets": streets})
-
-
 def _drivers(net: RoadNetwork, n: int, seed: int, cfg: DriverConfig) -> tuple[list[Driver], list]:
     roads = list(net.roads)
     params = [load_car("sedan" if i % 3 else "van") for i in range(n)]
@@ -50,7 +44,7 @@ def _drivers(net: RoadNetwork, n: int, seed: int, cfg: DriverConfig) -> tuple[li
 
 def _compiled_us(seed: int, seconds: float, warmup: float = 2.0) -> float:
     """CPU microseconds per car and physics tick of the compiled fleet (drivers at 20 Hz), after ``warmup`` s."""
-    net, c = _grid(), p.connect(p.DIRECT)
+    net, c = _grid(12, 150.0), p.connect(p.DIRECT)
     try:
         drivers, params = _drivers(net, CARS, seed, DriverConfig(rate_hz=20))
         fleet = TrafficFleet(c, drivers, params, [f"t{i}" for i in range(CARS)], PHYSICS_HZ)
@@ -69,7 +63,7 @@ def _compiled_us(seed: int, seconds: float, warmup: float = 2.0) -> float:
 def _python_us(seed: int, seconds: float) -> float:
     """The same cars as the per-tick Python drivers and kinematic bodies that the compiled fleet replaced (the
     reference, measured in the same call)."""
-    net, c = _grid(), p.connect(p.DIRECT)
+    net, c = _grid(12, 150.0), p.connect(p.DIRECT)
     try:
         drivers, params = _drivers(net, CARS, seed, DriverConfig(rate_hz=20))
         dyn = [KinematicDynamics(c, par, *d.spawn_pose(), PHYSICS_HZ) for d, par in zip(drivers, params, strict=True)]

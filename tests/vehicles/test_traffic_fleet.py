@@ -162,3 +162,29 @@ def test_a_fleet_refuses_mixed_rates_and_an_out_of_period_tick(client):
         fleet.poses(7)
     with pytest.raises(RuntimeError, match="tick 12 is not the fleet's next step"):
         fleet.advance(12, OtherCars.none())
+
+
+@pytest.mark.parametrize("watched", [True, False])
+def test_boxes_near_a_watched_point_follow_their_cars_every_step_so_contacts_see_them(client, watched):
+    """A ball resting on the lane ahead of a kinematic car: with the ball's position among the fleet's watched points
+    (as the run loop watches the UAVs) the car's box is placed before every physics step near it and the step's
+    contacts meet it; unwatched, the box stays where it was last placed and the car passes through."""
+    net = grid_network(3, 120.0)
+    cfg = DriverConfig(cruise_fraction_range=(1.0, 1.0), cruise_change_period=0.0, stop_probability=0.0)
+    fleet = CarFleet(client, [SEDAN], [cfg], [Route(roads=("h0_0.f", "h1_0.f"), start_s=5.0)], net, 240,
+                     np.random.default_rng(0), dynamics=["kinematic"])
+    lane = net.roads["h0_0.f"]
+    spot = lane.point(60.0, lane.lane_offset(0))
+    r = 0.3
+    ball = p.createMultiBody(1.0, p.createCollisionShape(p.GEOM_SPHERE, radius=r, physicsClientId=client),
+                             basePosition=[float(spot[0]), float(spot[1]), r], physicsClientId=client)
+    if watched:
+        fleet.near_points = lambda: np.array([p.getBasePositionAndOrientation(ball, physicsClientId=client)[0][:2]])
+    touched = False
+    for tick in range(1, 240 * 12 + 1):
+        fleet.apply_actuation()
+        p.stepSimulation(physicsClientId=client)
+        fleet.after_step(tick)
+        touched |= bool(p.getContactPoints(bodyA=ball, bodyB=int(fleet.body_ids[0]), physicsClientId=client))
+    assert float(np.linalg.norm(fleet.state.p_W[0, :2] - spot)) > 20.0  # the car drove past the spot
+    assert touched == watched

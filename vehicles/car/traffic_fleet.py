@@ -107,7 +107,7 @@ class TrafficFleet:
         for i in range(n):
             self._resync(i)
         self.cmd = np.zeros((n, 3))  # (accel, steer, hold) of the period being integrated
-        integrate(self.S, self.cmd, self.cfg, self.dt, self.physics_hz, self.buf)
+        integrate(self.S, self.cmd, self.cfg, self.dt, self.buf)
         self._placed = np.zeros(n, dtype=np.int64)  # tick of each box's last placement
         self._box_xy = np.array([xy for xy, _ in spawns], dtype=float)
         self._events: list[dict] = []
@@ -195,7 +195,7 @@ class TrafficFleet:
         flag, leader = np.zeros(n, dtype=np.bool_), np.zeros((n, 3))
         off = self.off_road.copy()
         ox = np.column_stack([others.xy, others.yaw, others.speed]) if len(others.length) else np.zeros((0, 4))
-        drive_all(tick, np.ones(n, dtype=np.bool_), X, ox, np.asarray(others.length, dtype=float), self.P_xy,
+        drive_all(tick, X, ox, np.asarray(others.length, dtype=float), self.P_xy,
                   self.P_t, self.P_seg, self.P_s, self.P_head, self.P_kappa, self.P_cap, self.P_ridx, self.P_corner,
                   self.P_lanew, self.P_laneoff, self.P_n, self.R_code, self.R_width, self.J_s, self.J_flag, self.J_n,
                   self.ends_route, self.proj, self.last_code, self.mode, self.release_tick, self.next_cruise,
@@ -211,7 +211,7 @@ class TrafficFleet:
         self._prev = self.buf[:, self.every - 1].copy()
         self.buf[:, 0] = self.buf[:, self.every]
         self._t0 = tick
-        integrate(self.S, self.cmd, self.cfg, self.dt, self.physics_hz, self.buf)
+        integrate(self.S, self.cmd, self.cfg, self.dt, self.buf)
 
     def _python_step(self, i: int, tick: int, x: np.ndarray, prev: np.ndarray, leader: np.ndarray) -> None:
         d = self.drivers[i]

@@ -141,10 +141,10 @@ def _cells(xy, cell):
 
 
 @njit(cache=True)
-def drive_all(tick, due, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, P_ridx, P_corner, P_lanew,
+def drive_all(tick, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, P_ridx, P_corner, P_lanew,
               P_laneoff, P_n, R_code, R_width, J_s, J_flag, J_n, ends_route, proj, last_code, mode, release_tick,
               next_cruise, cfg, two, out_cmd, out_flag, out_leader, out_off):
-    """One driver step of every car in ``due`` (bool (N,)) at ``tick``; see the module docstring.
+    """One driver step of every car at ``tick``; see the module docstring.
 
     ``X`` (N, ROWS) holds the cars' readings at ``tick``; ``OX`` (M, 4) the other (physics) cars' x, y, heading and
     forward speed, ``OLEN`` (M,) their lengths. ``proj`` (N, 4) holds each car's last projection (s, lateral,
@@ -169,8 +169,6 @@ def drive_all(tick, due, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_
         cell = max(cell, cfg[i, C_FOLLOW] + cfg[i, C_LEN])
     keys, order, cx, cy = _cells(allxy, cell)
     for i in range(n):
-        if not due[i]:
-            continue
         npts = P_n[i]
         xy, tt, seg, ss, head = P_xy[i], P_t[i], P_seg[i], P_s[i], P_head[i]
         px, py = X[i, R_X], X[i, R_Y]
@@ -281,7 +279,7 @@ def drive_all(tick, due, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_
 
 
 @njit(cache=True)
-def integrate(S, cmd, cfg, dt, physics_hz, buf):
+def integrate(S, cmd, cfg, dt, buf):
     """``buf.shape[1] - 1`` kinematic-bicycle ticks of every car from its state ``S`` (N, 7: x, y, yaw, speed, steer,
     beta, yaw rate) under its command ``cmd`` (N, 3: accel, steer, hold), as :meth:`KinematicBicycle.step` with
     ``dt``; ``buf[:, 0]`` must hold the readings of the start, ``buf[:, k]`` receives those after tick k (columns

@@ -75,3 +75,10 @@ def test_the_traffic_section_is_checked():
     with pytest.raises(WorldError) as info:
         load_world("road_standoff", ["traffic.engine=carla"])
     assert "traffic.engine" in str(info.value)
+
+
+def test_a_world_of_sumo_traffic_alone_runs(tmp_path):
+    """No listed ground vehicle: the car fleet holds SUMO's slots only."""
+    res = run("road_standoff", duration=3.0, seed=1, out_dir=tmp_path / "d", overrides=["ground_vehicles=[]", *SUMO])
+    assert res.status == "completed"
+    assert len(set(_truth(res)["vehicle"].tolist())) == 40

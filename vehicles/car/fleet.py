@@ -139,7 +139,7 @@ class CarFleet:
                  dynamics: Sequence[str] | None = None, sources: Sequence[TrafficSource] = ()) -> None:
         n = len(params)
         dynamics = ["physics"] * n if dynamics is None else list(dynamics)
-        if not (len(drivers) == n == len(routes) == len(dynamics)) or n == 0:
+        if not (len(drivers) == n == len(routes) == len(dynamics)) or (n == 0 and not sources):
             raise ValueError(f"CarFleet needs one params, driver config, route and dynamics per car, got "
                              f"{len(params)}/{len(drivers)}/{len(routes)}/{len(dynamics)}")
         for kind in dynamics:
@@ -190,6 +190,8 @@ class CarFleet:
         self.near_points: Callable[[], np.ndarray] | None = None
 
     def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
+        if len(spawns) < 2:
+            return
         xy = np.array([p for p, _ in spawns])
         half = 0.5 * np.array([par.length for par in self.params])
         tree = cKDTree(xy)

@@ -13,9 +13,6 @@ from __future__ import annotations
 import copy
 import math
 import statistics
-import tempfile
-import time
-from pathlib import Path
 from typing import Any
 
 import yaml
@@ -61,25 +58,10 @@ def team_world(n: int, duration_s: float = DURATION_S) -> dict[str, Any]:
 def run_team(n: int, duration_s: float = DURATION_S) -> dict[str, float]:
     """One run of :func:`team_world`: its simulated time, the CPU and wall time of its loop (from the end of tick 1,
     after setup, to the end of the run directory) and the wall time of its agents' phase (``autonomy``)."""
-    from simulator.engine import RunOptions, run_world
-    from worlds.loader import load_world
+    from simulator.bench.scaling import loop_rtf
 
-    marks: dict[str, float] = {}
-
-    def at_tick(tick: int) -> None:
-        if tick == 1:
-            marks["cpu"], marks["wall"] = time.process_time(), time.perf_counter()
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "team.yaml"
-        path.write_text(yaml.safe_dump(team_world(n, duration_s), sort_keys=False), encoding="utf-8")
-        out = run_world(load_world(path), RunOptions(out_dir=Path(tmp) / "run", plots=False, on_tick=at_tick))
-        cpu, wall = time.process_time() - marks["cpu"], time.perf_counter() - marks["wall"]
-    if out.status != "completed":
-        raise RuntimeError(f"the {n}-UAV team world did not complete: {out.error}")
-    m = out.metrics
-    return {"sim_s": float(m["sim_time_s"]), "cpu_s": cpu, "wall_s": wall,
-            "autonomy_s": float(m["wall_time_breakdown_s"]["autonomy"])}
+    r = loop_rtf(team_world(n, duration_s))
+    return {"sim_s": r["sim_s"], "cpu_s": r["cpu_s"], "wall_s": r["wall_s"], "autonomy_s": r["autonomy"] * r["sim_s"]}
 
 
 def agent_steps(n: int, duration_s: float = DURATION_S) -> int:

@@ -54,8 +54,8 @@ def _world(cars: int, engine: str, uavs: int | None, duration_s: float) -> dict[
 
 def loop_rtf(raw: dict[str, Any]) -> dict[str, float]:
     """One run of the world data ``raw`` (no plots): its CPU real-time factor from the first tick to the end of the
-    run directory (setup left out) as ``cpu_rtf``, its wall twin as ``rtf``, and its phases' wall seconds per
-    simulated second."""
+    run directory (setup left out) as ``cpu_rtf``, its wall twin as ``rtf``, the seconds behind them (``sim_s``,
+    ``cpu_s``, ``wall_s``) and its phases' wall seconds per simulated second."""
     from simulator.engine import RunOptions, run_world
     from worlds.loader import load_world
 
@@ -71,10 +71,10 @@ def loop_rtf(raw: dict[str, Any]) -> dict[str, float]:
         out = run_world(load_world(path), RunOptions(out_dir=Path(tmp) / "run", plots=False, on_tick=at_tick))
         cpu, wall = time.process_time() - marks["cpu"], time.perf_counter() - marks["wall"]
         if out.status != "completed":
-            raise RuntimeError(f"scaling run ended {out.status}: {out.error}")
+            raise RuntimeError(f"the run of {raw.get('name', 'a world')} ended {out.status}: {out.error}")
         metrics = json.loads((Path(tmp) / "run" / "metrics.json").read_text(encoding="utf-8"))
     sim = float(raw["sim"]["duration_s"])
-    row = {"cpu_rtf": sim / max(cpu, 1e-9), "rtf": sim / max(wall, 1e-9)}
+    row = {"cpu_rtf": sim / max(cpu, 1e-9), "rtf": sim / max(wall, 1e-9), "sim_s": sim, "cpu_s": cpu, "wall_s": wall}
     row.update({p: metrics["wall_time_breakdown_s"].get(p, 0.0) / sim for p in PHASES})
     return row
 

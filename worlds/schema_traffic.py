@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from worlds.catalog import CAR_COLOURS, CAR_TYPES
 from worlds.schema_base import NonNegFloat, PositiveFloat, Strict
@@ -105,20 +105,14 @@ class TrafficSpec(Strict):
     driver: DriverSpec = Field(default_factory=DriverSpec, description="the generated cars' driver settings "
                                                                        "(rate_hz is the section's)")
 
-    @field_validator("types")
+    @field_validator("types", "colours")
     @classmethod
-    def _known_types(cls, value: list[str]) -> list[str]:
-        bad = [t for t in value if t not in CAR_TYPES]
+    def _known(cls, value: list[str], info: ValidationInfo) -> list[str]:
+        known, what = (CAR_TYPES, "car types of vehicles/cars") if info.field_name == "types" else (CAR_COLOURS,
+                                                                                                   "car colours")
+        bad = [v for v in value if v not in known]
         if bad:
-            raise ValueError(f"car types of vehicles/cars ({', '.join(CAR_TYPES)}), got {bad}")
-        return value
-
-    @field_validator("colours")
-    @classmethod
-    def _known_colours(cls, value: list[str]) -> list[str]:
-        bad = [c for c in value if c not in CAR_COLOURS]
-        if bad:
-            raise ValueError(f"car colours ({', '.join(CAR_COLOURS)}), got {bad}")
+            raise ValueError(f"{what} ({', '.join(known)}), got {bad}")
         return value
 
     @model_validator(mode="after")

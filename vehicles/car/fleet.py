@@ -180,8 +180,7 @@ class CarFleet:
         self._events: list[tuple[int, dict]] = []
         self._off_road = np.zeros(n, dtype=bool)
         self._tick = 0
-        self._phys_every = {i: self._every[i] for i in self._phys}
-        self._every_gcd = math.gcd(*self._phys_every.values()) if self._phys else 0
+        self._every_gcd = math.gcd(*(self._every[i] for i in self._phys)) if self._phys else 0
         self._rows: list[tuple[float, ...]] = []
         self._prev_rows: list[tuple[float, ...]] | None = None  # None: no step yet (a_W = 0)
         self._read()
@@ -206,6 +205,17 @@ class CarFleet:
         """Read every physics car's state row; the arrays of all cars are made when first needed (:meth:`_arrays`)."""
         self._prev_rows, self._rows = self._rows, [self.dynamics[i].state_row() for i in self._phys]
         self._arr: _Arrays | None = None
+        self._phys_x: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _phys_readings(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The physics cars' rows of the last tick as an array, with their headings (from the quaternion) and forward
+        speeds, in scalar math (a handful of cars); kept until the next read."""
+        if self._phys_x is None:
+            rows = self._rows
+            h = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
+            v = [r[7] * math.cos(hh) + r[8] * math.sin(hh) for r, hh in zip(rows, h, strict=True)]
+            self._phys_x = (np.array(rows), np.array(h), np.array(v))
+        return self._phys_x
 
     def _arrays(self) -> _Arrays:
         """Every car's reading at the last tick as arrays, with the heading and forward speed of each car and its
@@ -215,11 +225,9 @@ class CarFleet:
             p_W, q_WB, v_W, a_W = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 3)), np.zeros((n, 3))
             omega, yaw, speed = np.zeros(n), np.zeros(n), np.zeros(n)
             if self._phys:
-                rows, idx = self._rows, self._phys
-                x = np.array(rows)
-                # heading and forward speed per car in scalar math: a handful of cars
-                h = [math.atan2(2 * (r[6] * r[5] + r[3] * r[4]), 1 - 2 * (r[4] * r[4] + r[5] * r[5])) for r in rows]
-                speed[idx] = [r[7] * math.cos(hh) + r[8] * math.sin(hh) for r, hh in zip(rows, h, strict=True)]
+                idx = self._phys
+                x, h, v = self._phys_readings()
+                speed[idx] = v
                 p_W[idx], q_WB[idx], v_W[idx], omega[idx], yaw[idx] = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12], h
                 if self._prev_rows is not None:
                     a_W[idx] = (x[:, 7:10] - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz
@@ -250,7 +258,7 @@ class CarFleet:
         for i, dyn in self.dynamics.items():
             dyn.actuate(self.drivers[i].command)
         if self.traffic or self.sources:
-            pts = [np.array([r[0:2] for r in self._rows])] if self._phys else []
+            pts = [self._phys_readings()[0][:, 0:2]] if self._phys else []
             if self.near_points is not None:
                 pts.append(np.asarray(self.near_points(), dtype=float).reshape(-1, 2)[:, :2])
             if pts:
@@ -303,8 +311,8 @@ class CarFleet:
         """The physics cars at the last tick, as a traffic fleet's leader search sees them."""
         if not self._phys:
             return OtherCars.none()
-        x, idx = self._arrays(), self._phys
-        return OtherCars(xy=x.p_W[idx, :2], yaw=x.yaw[idx], speed=x.speed[idx], length=self._length_arr[idx])
+        x, h, v = self._phys_readings()  # not the all-car arrays: this is asked at every tick of an external source
+        return OtherCars(xy=x[:, 0:2], yaw=h, speed=v, length=self._length_arr[self._phys])
 
     def _check_road(self, i: int, tick: int) -> None:
         """Events when a car's centre leaves the street (|lateral| > lanes x lane_width) or comes back."""

@@ -17,21 +17,29 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar
 
 import numpy as np
 from scipy import stats
 
 from simulator.record import atomic_write_text
+from simulator.reproduce.seeds import EVAL_SEED, PAPER_RUNS, TUNING_SEEDS
+
+if TYPE_CHECKING:
+    from simulator.reproduce.rules import Judgement
 
 T = TypeVar("T")
 R = TypeVar("R")
 
 __all__ = ["Verdict", "Finding", "Table", "Figure", "PaperReport", "ReproContext", "MeanCI", "mean_ci",
-           "write_paper_report", "paper_markdown"]
+           "write_paper_report", "paper_markdown",
+           "verdicts_record", "EVAL_SEED", "TUNING_SEEDS", "PAPER_RUNS", "VERDICTS"]
 
-Verdict = Literal["reproduced", "not reproduced", "not comparable"]
-VERDICTS: tuple[str, ...] = ("reproduced", "not reproduced", "not comparable")
+Verdict = Literal["reproduced", "not reproduced", "inconclusive", "not comparable"]
+VERDICTS: tuple[str, ...] = ("reproduced", "not reproduced", "inconclusive", "not comparable")
+"""*inconclusive*: the 95 % interval straddles the claim's line (the runs cannot decide); *not comparable*: the claim
+cannot be judged in our set-up (the reason is given)."""
+
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,15 +87,47 @@ class Finding:
         Decided by the reproduction code from the measured numbers, never set by hand.
     why : str
         The measured numbers behind the verdict, and for "not comparable" the reason.
+    rule : str
+        The rule that decided the verdict, in words (as strict as the claim).
+    ours : str
+        Our figure the rule judged.
+    paper : str
+        The paper's figure or wording for the claim ("" when the paper gives no number).
+    runs : int
+        Runs behind the verdict.
+    paper_faithful : bool
+        True when judged on the paper's own configuration; False when on ours with our additions.
+    paper_claim : bool
+        True for a claim the paper makes; False for our extension (listed apart, never in the paper's tallies).
     """
 
     claim: str
     verdict: Verdict
     why: str
+    rule: str = ""
+    ours: str = ""
+    paper: str = ""
+    runs: int = 0
+    paper_faithful: bool = True
+    paper_claim: bool = True
 
     def __post_init__(self) -> None:
         if self.verdict not in VERDICTS:
             raise ValueError(f"Finding.verdict must be one of {VERDICTS}, got {self.verdict!r}")
+
+    @classmethod
+    def judged(cls, claim: str, judgement: "Judgement", *, paper: str, why: str = "", paper_faithful: bool = True,
+               paper_claim: bool = True) -> "Finding":
+        """A finding whose verdict, rule, figure and run count come from a rule of :mod:`simulator.reproduce.rules`."""
+        return cls(claim=claim, verdict=judgement.verdict, why=why or judgement.ours, rule=judgement.rule,
+                   ours=judgement.ours, paper=paper, runs=judgement.runs, paper_faithful=paper_faithful,
+                   paper_claim=paper_claim)
+
+    def record(self) -> dict:
+        """The finding as one entry of ``verdicts.json``."""
+        return {"claim": self.claim, "verdict": self.verdict, "rule": self.rule, "ours": self.ours,
+                "paper": self.paper, "runs": self.runs, "paper_faithful": self.paper_faithful,
+                "paper_claim": self.paper_claim, "why": self.why}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -133,7 +173,7 @@ class ReproContext:
     workers : int | None
         Worker processes for campaigns (None: all cores).
     seed : int
-        Base seed: configuration ``k`` of a paper draws its runs' seeds from it.
+        Base seed of the evaluation runs (:meth:`run_seeds`); :data:`EVAL_SEED` by default.
     progress : bool
         Show progress bars.
     quick : bool
@@ -143,13 +183,27 @@ class ReproContext:
     out_dir: Path
     runs: int
     workers: int | None = None
-    seed: int = 1
+    seed: int = EVAL_SEED
     progress: bool = True
     quick: bool = False
 
     def __post_init__(self) -> None:
         if self.runs < 1:
             raise ValueError(f"ReproContext.runs must be >= 1, got {self.runs}")
+
+    def run_seeds(self, runs: int | None = None) -> list[int]:
+        """Seeds of runs ``0 … runs − 1`` (default ``self.runs``), the same for every variant of every experiment
+        (common random numbers: a variant never enters a run's seed, so differences between variants are paired):
+        ``SeedSequence(seed, spawn_key=(r,))``, as a campaign of base ``seed`` seeds its run ``r``."""
+        from simulator.campaign.config import run_seed
+
+        return [run_seed(self.seed, r) for r in range(self.runs if runs is None else runs)]
+
+    def seeds_text(self) -> str:
+        """The seed declaration of a report: evaluation base, and whether it is disjoint from the tuning seeds."""
+        tuned = " — **the tuning base: these runs are not an evaluation**" if self.seed == 1 else ""
+        return (f"Evaluation seeds: base {self.seed} (run r: `SeedSequence({self.seed}, spawn_key=(r,))`, the same "
+                f"for every variant){tuned}. Tuning and development seeds: {TUNING_SEEDS}.")
 
     def map(self, fn: Callable[[T], R], jobs: Sequence[T], chunksize: int = 1) -> list[R]:
         """``[fn(j) for j in jobs]``, on a pool of ``workers`` processes (all cores by default) unless one suffices;
@@ -173,6 +227,7 @@ class PaperReport:
     figures: tuple[Figure, ...] = ()
     findings: tuple[Finding, ...] = ()
     deviations: tuple[str, ...] = ()
+    seeds: str = ""
     wall_time_s: float = float("nan")
     quick: bool = False
     extra: dict = field(default_factory=dict)
@@ -183,13 +238,27 @@ def paper_markdown(rep: PaperReport, command: str) -> str:
     md = [f"# Reproduction of paper {rep.paper}: {rep.title}", "",
           f"Generated by `{command}` ({rep.runs} run{'s' if rep.runs != 1 else ''} per configuration"
           + (f", {rep.wall_time_s:.0f} s wall time" if math.isfinite(rep.wall_time_s) else "") + ")."
-          + (" **Quick mode: shortened experiments, not a reproduction.**" if rep.quick else ""), "",
+          + (" **Quick mode: shortened experiments, not a reproduction.**" if rep.quick else "")
+          + _runs_warning(rep), "",
           "## Set-up", "", rep.setup.strip(), ""]
+    if rep.seeds:
+        md += [rep.seeds, ""]
     if rep.deviations:
         md += ["## Deviations from the paper", "", *(f"- {d}" for d in rep.deviations), ""]
-    md += ["## Findings", "", "| claim | verdict | evidence |", "|---|---|---|"]
-    md += [f"| {f.claim} | **{f.verdict}** | {f.why} |" for f in rep.findings]
-    md.append("")
+    esc = lambda c: str(c).replace("|", "\\|")  # noqa: E731
+    for title, keep in (("Findings: the paper's claims, on the paper's configuration",
+                         lambda f: f.paper_claim and f.paper_faithful),
+                        ("Findings: the paper's claims, on our configuration (with our additions)",
+                         lambda f: f.paper_claim and not f.paper_faithful),
+                        ("Our extensions (not claims of the paper)", lambda f: not f.paper_claim)):
+        rows = [f for f in rep.findings if keep(f)]
+        if not rows:
+            continue
+        md += [f"## {title}", "", "| claim | verdict | rule | ours | paper | runs | evidence |",
+               "|---|---|---|---|---|---:|---|"]
+        md += [f"| {esc(f.claim)} | **{f.verdict}** | {esc(f.rule)} | {esc(f.ours)} | {esc(f.paper)} | {f.runs} | "
+               f"{esc(f.why)} |" for f in rows]
+        md.append("")
     for t in rep.tables:
         md += [f"## {t.title}", "", t.markdown(), ""]
         if t.note:
@@ -197,6 +266,29 @@ def paper_markdown(rep: PaperReport, command: str) -> str:
     for fig in rep.figures:
         md += [f"![{fig.caption}]({fig.path})", "", f"*{fig.caption}*", ""]
     return "\n".join(md)
+
+
+def _runs_warning(rep: PaperReport) -> str:
+    want = PAPER_RUNS.get(rep.paper)
+    if want is None or rep.runs >= want or rep.quick:
+        return ""
+    return f" **Preliminary: {rep.runs} runs per configuration where the reproduction asks for {want}.**"
+
+
+def verdicts_record(rep: PaperReport, command: str) -> dict:
+    """The content of ``verdicts.json``: every claim with its verdict, rule, figures, runs and faithfulness, and the
+    tallies (``paper``: the paper's claims judged on its configuration; ``ours``: its claims on ours;
+    ``extensions``: our own claims)."""
+    def tally(keep: Callable[[Finding], bool]) -> dict[str, int]:
+        return {v: sum(1 for f in rep.findings if keep(f) and f.verdict == v) for v in VERDICTS}
+
+    return {"paper": rep.paper, "title": rep.title, "command": command, "runs": rep.runs,
+            "runs_asked": PAPER_RUNS.get(rep.paper), "quick": rep.quick, "seeds": rep.seeds,
+            "claims": [f.record() for f in rep.findings],
+            "tally": {"paper": tally(lambda f: f.paper_claim and f.paper_faithful),
+                      "ours": tally(lambda f: f.paper_claim and not f.paper_faithful),
+                      "extensions": tally(lambda f: not f.paper_claim)},
+            "deviations": list(rep.deviations)}
 
 
 def write_paper_report(rep: PaperReport, out_dir: Path, command: str) -> Path:

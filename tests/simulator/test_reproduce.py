@@ -9,7 +9,7 @@ from simulator.cli import main
 from simulator.reproduce.report import Finding, MeanCI, Table, mean_ci
 
 PHYSICS_WORLDS = {"001": "relay_tracking", "003": "formation_imm"}
-VERDICT = re.compile(r"\| \*\*(reproduced|not reproduced|not comparable)\*\* \|")
+VERDICT = re.compile(r"\| \*\*(reproduced|not reproduced|inconclusive|not comparable)\*\* \|")
 
 
 def test_mean_ci_is_students_t_interval():

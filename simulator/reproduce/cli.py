@@ -5,8 +5,10 @@
 Each paper's reproduction writes ``DIR/<paper>/report.md`` with its figures beside it and ``verdicts.json`` (every
 claim with its verdict, rule, figures, runs and whether it was judged on the paper's configuration);
 ``DIR/report.md`` lists the papers run with their tallies: the paper's claims on the paper's configuration first, on
-ours second, our extensions apart. ``--runs`` defaults to each paper's own count (:data:`PAPER_RUNS`). Exit codes: 0 every requested reproduction ran; 1 one of them raised (the others still
-ran, and the index says which failed); 2 bad input; 130 interrupted.
+ours second, our extensions apart. ``--runs`` defaults to each paper's own count (:data:`PAPER_RUNS`).
+
+Exit codes: 0 every requested reproduction ran; 1 one of them raised (the others still ran, and the index says which
+failed); 2 bad input; 130 interrupted.
 """
 
 from __future__ import annotations
@@ -52,7 +54,8 @@ def reproduce_papers(codes: list[str], out: Path, runs: int | None, workers: int
     for code in codes:
         paper_dir = out / code
         paper_dir.mkdir(parents=True, exist_ok=True)
-        ctx = ReproContext(out_dir=paper_dir, runs=runs or PAPER_RUNS[code], workers=workers, seed=seed, progress=progress, quick=quick)
+        ctx = ReproContext(out_dir=paper_dir, runs=runs or PAPER_RUNS[code], workers=workers, seed=seed,
+                           progress=progress, quick=quick)
         t0 = time.perf_counter()
         try:
             module = importlib.import_module(PAPERS[code][0])

@@ -173,8 +173,8 @@ def paired_within(a: ArrayLike, b: ArrayLike, margin: float, unit: str = "",
         verdict = "not reproduced"
     else:
         verdict = "inconclusive"
-    return Judgement(verdict=verdict, rule=rule, ours=f"{names[0]} − {names[1]} = {text}{unit} over {x.size} paired runs",
-                     runs=int(x.size))
+    return Judgement(verdict=verdict, rule=rule, runs=int(x.size),
+                     ours=f"{names[0]} − {names[1]} = {text}{unit} over {x.size} paired runs")
 
 
 def clopper_pearson(successes: int, trials: int, confidence: float = 0.95) -> tuple[float, float]:

@@ -141,14 +141,15 @@ def _tables(res: Results, runs: int) -> list[Table]:
 
 
 _SPIKE_NOTE = (
-    "Case 2's largest errors come at steps 150–160, while the target brakes to its stop (78–90 s), with or without the "
-    "outages: the control shows the same peak, so the comparison of case 2 inside and outside the windows measures "
-    "the stop, not the outages, and the paired difference above removes it. The peak is a property of case 2's "
-    "geometry: UAV 1 and 3, with the lighter case-2 tracking weights, trail the braking target while UAV 2 and 4 "
-    f"arrive over it; a UAV within a few metres of the nadir (here: {NEAR_NADIR_M:g} m) sees the target at a nadir "
-    "angle inside its own noise (σ ≈ 5°, ≈ 9 m at 100 m), where the azimuth's sensitivity to position grows as 1/ρ "
-    "and the cubature filter's Gaussian approximation of the measurement is poor. The last column but one says how "
-    "often that geometry holds at the peak; we do not mitigate it (the paper's filter and guidance are kept).")
+    "Case 2's largest errors come in the first window, while the target brakes to its stop (78–90 s), with or "
+    "without the outages: the control's peak is of the same size, so comparing case 2 inside and outside the windows "
+    "measures the stop, not the outages; the paired difference above removes it. Case 1 (same stop, same seeds; last "
+    "column) has no such peak, so it comes with case 2's weights: UAV 1 and 3 (w_x = w_y = 0.2) trail the braking "
+    "target. A suspected mechanism is near-nadir geometry: a UAV within a few metres of the target's nadir sees it at "
+    "a nadir angle inside its own noise (σ ≈ 5°, ≈ 9 m at 100 m), where the azimuth's sensitivity to position grows "
+    "as 1/ρ and the cubature filter's Gaussian approximation is poor; the column before last says how often two or "
+    "more UAVs were that close at the peak, i.e. whether the geometry accompanies it. We do not mitigate it (the "
+    "paper's filter and guidance are kept).")
 
 
 def reproduce(ctx: ReproContext) -> PaperReport:

@@ -74,6 +74,9 @@ class ConsensusLoopConfig:
     ----------
     case : {1, 2}
         Case 2 changes UAV 1 and 3's tracking weights and cuts links 1–3 (steps 150–200) and 1–4 (steps 300–350).
+    outages : bool
+        Whether case 2 cuts its links (False: case 2's weights on the full ring, the paired control that isolates the
+        outages' effect from the rest of case 2).
     steps : int
         Number of steps, >= 1 (the paper: 400).
     dt : float
@@ -97,6 +100,7 @@ class ConsensusLoopConfig:
     """
 
     case: Literal[1, 2] = 1
+    outages: bool = True
     steps: int = 400
     dt: float = 0.5
     consensus_iterations: int = 3
@@ -125,7 +129,7 @@ class ConsensusLoopConfig:
 
     def outage_links(self, step: int) -> list[tuple[int, int]]:
         """Links (0-based) down at ``step`` (1-based)."""
-        if self.case != 2:
+        if self.case != 2 or not self.outages:
             return []
         return [link for link, lo, hi in (((0, 2), 150, 200), ((0, 3), 300, 350)) if lo <= step < hi]
 

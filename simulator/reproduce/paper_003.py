@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.kinematic.formation import CASES, FormationLoopConfig
+from simulator.kinematic.formation import FormationLoopConfig
 from simulator.reproduce.paper_003_figures import figures
 from simulator.reproduce.paper_003_findings import kinematic_findings
 from simulator.reproduce.paper_003_physics import (PHYSICS_RUNS, QUICK_DURATION_S, WORLD, physics_findings,

@@ -16,8 +16,9 @@ and, for the comparison the paper omits, formations that all fly the desired ran
 - ``fixed``: the start bearings held (translated with the estimate);
 - ``trail``: a ±15° fan behind the target;
 - ``random``: bearings drawn uniformly on [0, 2π) once per run (from the run seed), held like ``fixed``;
-- ``alg1@ω``: the paper's configuration with the IMM's CT models at ±ω rad/s instead of ±0.3 (:data:`MISMATCHED_RATES`, away from
-  the scripted 0.25 / 0.35 rad/s turns), in the turning cases and case 1 (:data:`MISMATCH_CASES`).
+- ``alg1@ω``: the paper's configuration with the IMM's CT models at ±ω rad/s instead of ±0.3
+  (:data:`MISMATCHED_RATES`, away from the scripted 0.25 / 0.35 rad/s turns), in the turning cases and case 1
+  (:data:`MISMATCH_CASES`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from simulator.kinematic.formation import CASES, FormationLoopConfig, FormationL
 from simulator.reproduce.report import ReproContext
 
 __all__ = ["PAPER", "FORMATIONS", "MISMATCHED_RATES", "MISMATCH_CASES", "RANGE_M", "SETTLE_S", "Results", "variants",
-           "run_kinematic", "summarize", "turn_windows"]
+           "run_kinematic", "summarize", "turn_windows", "random_bearings"]
 
 PAPER = "alg1"
 FORMATIONS = ("optimal", "fixed", "trail", "random")
@@ -66,11 +67,21 @@ def _config(case: int, variant: str, quick: bool, bearings: tuple[float, ...]) -
                                **extra)
 
 
+def _streams(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSequence]:
+    """Run ``seed``'s bearing-noise and random-geometry streams (the same for every case and variant)."""
+    noise, geometry = np.random.SeedSequence(seed).spawn(2)
+    return noise, geometry
+
+
+def random_bearings(seed: int) -> tuple[float, ...]:
+    """The ``random`` formation's directions target → agent (rad) of run ``seed``: uniform on [0, 2π)."""
+    return tuple(float(b) for b in np.random.default_rng(_streams(seed)[1]).uniform(0.0, 2.0 * np.pi, 3))
+
+
 def _one(args: tuple[int, str, int, bool]) -> tuple[FormationLoopResult, dict[str, float]]:
     case, variant, seed, quick = args
-    noise, geometry = np.random.SeedSequence(seed).spawn(2)
-    bearings = tuple(float(b) for b in np.random.default_rng(geometry).uniform(0.0, 2.0 * np.pi, 3))
-    res = run_formation_loop(_config(case, variant, quick, bearings), np.random.default_rng(noise))
+    res = run_formation_loop(_config(case, variant, quick, random_bearings(seed)),
+                             np.random.default_rng(_streams(seed)[0]))
     return res, summarize(res)
 
 

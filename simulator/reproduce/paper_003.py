@@ -135,6 +135,8 @@ radius 40 m (0.25 rad/s at 10 m/s); 4 straight, left 210°, straight, right 210�
             "initial velocity (the paper's agents start with it).",
             "Kinematic agents (ideal velocity tracking) rather than the paper's double integrators: the PD law's "
             "acceleration is realised as a velocity step; the comparison isolates geometry.",
+            f"Step {base.dt} s for bearings, filter and guidance, speed limit {base.guidance.max_speed} m/s and the "
+            "Jacobi PD gains are ours: the paper gives no sample time, limit or gains.",
             f"Steady window t ≥ {SETTLE_S:g} s of the 30 s cases (the paper reads its figures by eye): a random "
             "geometry can lie across the target from the start, several seconds' flight away.",
             f"The baselines (fixed, trail, random) and the optimal formation they are compared with fly a common "

@@ -12,7 +12,10 @@ Each step of ``dt`` seconds
    that is not optimised: ``formation="fixed"`` holds the start geometry translated with the estimate, and
    ``formation="trail"`` flies the agents in a narrow fan behind the target (the formation law's ``geometry="trail"``:
    bearings ±``trail_fan`` around the direction opposite to its velocity, at the agents' mean start range), a natural
-   follow-the-car formation whose nearly parallel bearing lines are the poor geometry Algorithm 1 avoids;
+   follow-the-car formation whose nearly parallel bearing lines are the poor geometry Algorithm 1 avoids. With
+   ``ranges`` set, every formation flies those ranges (Algorithm 1 keeps each agent's current range otherwise), so
+   formations differ only in their bearings; ``fixed_bearings`` gives the fixed formation other directions than the
+   start's (a random geometry, say);
 4. each agent flies its commanded velocity for one step (a velocity-tracking plant, as
    :class:`~autonomy.guidance.formation.guidance.FormationGuidance` assumes).
 
@@ -90,6 +93,11 @@ class FormationLoopConfig:
         the target.
     trail_fan : float
         Half-angle of the ``trail`` fan, rad, > 0.
+    ranges : tuple of float | None
+        Desired range of each agent to the estimate, m, > 0, for every formation (None: ``optimal`` keeps each
+        agent's current range, ``fixed`` the start offsets, ``trail`` the mean start range).
+    fixed_bearings : tuple of float | None
+        Directions target → agent of the ``fixed`` formation, rad (None: the start's); needs ``ranges``.
     max_duration : float | None
         Stop after this many seconds of the case (None: the whole case), s.
     dt : float
@@ -113,6 +121,8 @@ class FormationLoopConfig:
     case: int = 1
     formation: Literal["optimal", "fixed", "trail"] = "optimal"
     trail_fan: float = float(np.deg2rad(15.0))
+    ranges: tuple[float, ...] | None = None
+    fixed_bearings: tuple[float, ...] | None = None
     max_duration: float | None = None
     dt: float = 0.1
     sigma_bearing: float = 0.1
@@ -136,6 +146,13 @@ class FormationLoopConfig:
                 raise ValueError(f"FormationLoopConfig.{name} must be > 0, got {getattr(self, name)}")
         if not 0.0 < self.p_stay < 1.0:
             raise ValueError(f"FormationLoopConfig.p_stay must be in (0, 1), got {self.p_stay}")
+        n = self.guidance.team_size
+        if self.ranges is not None and (len(self.ranges) != n or not all(np.isfinite(r) and r > 0
+                                                                         for r in self.ranges)):
+            raise ValueError(f"FormationLoopConfig.ranges must be {n} values > 0 m, got {self.ranges}")
+        if self.fixed_bearings is not None and (self.ranges is None or len(self.fixed_bearings) != n):
+            raise ValueError(f"FormationLoopConfig.fixed_bearings needs ranges and {n} angles, got "
+                             f"{self.fixed_bearings}")
         if len(self.agents_p0) != self.guidance.team_size:
             raise ValueError(f"FormationLoopConfig: {len(self.agents_p0)} agents for a team of "
                              f"{self.guidance.team_size}")
@@ -197,6 +214,11 @@ def run_formation_loop(cfg: FormationLoopConfig, rng: np.random.Generator) -> Fo
     trail_range = float(np.mean(np.linalg.norm(offsets, axis=1)))
     guidance = cfg.guidance if cfg.formation != "trail" else replace(
         cfg.guidance, geometry="trail", ranges=(trail_range,) * n, trail_fan=cfg.trail_fan)
+    if cfg.ranges is not None:
+        guidance = replace(guidance, ranges=cfg.ranges)
+        theta = (np.arctan2(offsets[:, 1], offsets[:, 0]) if cfg.fixed_bearings is None
+                 else np.asarray(cfg.fixed_bearings, dtype=float))
+        offsets = np.asarray(cfg.ranges)[:, None] * np.c_[np.cos(theta), np.sin(theta)]
     sig = cfg.sigma_bearing
     imm: IMM | None = None
     rows = {k: [] for k in ("t", "x", "err", "mu", "p", "ld", "ldmax")}

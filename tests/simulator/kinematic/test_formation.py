@@ -48,3 +48,28 @@ def test_bad_configuration_is_named():
         FormationLoopConfig(formation="circle")
     with pytest.raises(ValueError, match="case must be one of"):
         FormationLoopConfig(case=9)
+
+
+@pytest.mark.parametrize("formation", ["optimal", "fixed", "trail"])
+def test_every_formation_flies_the_common_range(formation):
+    r = run_formation_loop(FormationLoopConfig(case=1, formation=formation, ranges=(95.0,) * 3, max_duration=15.0),
+                           np.random.default_rng(3))
+    late = r.t >= 10.0
+    ranges = np.linalg.norm(r.agents[late] - r.truth[late][:, None, [0, 2]], axis=2)
+    assert np.mean(ranges, axis=0) == pytest.approx([95.0] * 3, abs=6.0)
+
+
+def test_fixed_bearings_set_the_fixed_formations_directions():
+    theta = (0.0, 2.0, 4.0)
+    r = run_formation_loop(FormationLoopConfig(case=1, formation="fixed", ranges=(95.0,) * 3, fixed_bearings=theta,
+                                               max_duration=15.0), np.random.default_rng(3))
+    rel = r.agents[-1] - r.truth[-1][[0, 2]]
+    off = np.angle(np.exp(1j * (np.arctan2(rel[:, 1], rel[:, 0]) - np.array(theta))))
+    assert off == pytest.approx([0.0] * 3, abs=0.1)
+
+
+def test_bad_ranges_and_bearings_are_named():
+    with pytest.raises(ValueError, match="ranges must be 3 values > 0 m"):
+        FormationLoopConfig(ranges=(95.0, -1.0, 95.0))
+    with pytest.raises(ValueError, match="fixed_bearings needs ranges and 3 angles"):
+        FormationLoopConfig(fixed_bearings=(0.0, 1.0, 2.0))

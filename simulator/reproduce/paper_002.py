@@ -29,6 +29,8 @@ __all__ = ["reproduce", "CONFIGS", "campaign_dirs"]
 
 QUICK_DURATION_S = 12.0
 REPLAY_DURATION_S = 150.0
+FIXTURE_RUNS = 20
+"""Runs of the sine-road reference row of the estimation table (the tuning scene; no verdict rests on it)."""
 UAVS = ("uav1", "uav2")
 
 TABLE_II = {"EKF UAV1": ("ekf_nmpc", "uav1"), "EKF UAV2": ("ekf_nmpc", "uav2"), "EKF fused": ("ekf_nmpc", None),
@@ -78,17 +80,19 @@ def _guidance_job(job: tuple[str, float]) -> object:
 
 def _replays(ctx: ReproContext) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float]:
     """Estimation only: the paper's filters and ours on the seeded curves (one per evaluation seed) and on the sine
-    fixture (the same radar-noise seeds), per filter the per-run fused error."""
+    fixture (the first :data:`FIXTURE_RUNS` of the same radar-noise seeds), per filter the per-run fused error."""
     from simulator.reproduce.road_replay import PAPER_FILTERS, ReplayJob, run_job
 
     duration = 40.0 if ctx.quick else REPLAY_DURATION_S
     seeds = ctx.run_seeds()
-    jobs = [ReplayJob(case, seed=s, duration=duration, filters=PAPER_FILTERS)
-            for case in ("curve", "single_road") for s in seeds]
+    fixture_seeds = seeds[:FIXTURE_RUNS]  # a reference row, judged nowhere: fewer runs
+    jobs = [ReplayJob("curve", seed=s, duration=duration, filters=PAPER_FILTERS) for s in seeds]
+    jobs += [ReplayJob("single_road", seed=s, duration=duration, filters=PAPER_FILTERS) for s in fixture_seeds]
     res = ctx.map(run_job, jobs)
     n = len(seeds)
-    out = [{k: np.array([r[k] for r in res[c * n:(c + 1) * n]]) for k in PAPER_FILTERS} for c in range(2)]
-    return out[0], out[1], duration
+    curve = {k: np.array([r[k] for r in res[:n]]) for k in PAPER_FILTERS}
+    fixture = {k: np.array([r[k] for r in res[n:]]) for k in PAPER_FILTERS}
+    return curve, fixture, duration
 
 
 def _solver_table(runs: dict[str, dict[int, dict]], idx: list[int]) -> Table:
@@ -186,6 +190,11 @@ def _deviations(runs: int, n_traffic: int) -> tuple[str, ...]:
         "model is not given).",
         "The paper solves the NMPC by gradient descent on the costate equations; ours by Fatrop (interior point) on "
         "the same cost and limits.",
+        "Table I's NMPC in our solver keeps what every NMPC of the project has beyond the paper's problem: a 20 m "
+        "UAV–UAV separation constraint (an exact penalty; at the 180° spacing of a 187.5 m orbit the UAVs are 375 m "
+        "apart), RK4 prediction (2 substeps) of the paper's lagged unicycle, a planning altitude, and when a solve "
+        "fails the shifted previous plan, then the vector field (failures counted in the solver table); the speed is "
+        "bounded by |u_v − v0| ≤ 3.75 m/s as in Table I.",
         "The quadrotors follow the NMPC's speed and heading-rate commands through their own flight controller, not "
         "the paper's first-order lags alone.",
         "LVFG: the project's Lyapunov vector field given the NMPC's speed (v0 ± 3.75 m/s) and turn (0.2 rad/s) limits "

@@ -78,7 +78,8 @@ def curve_table(curve: dict[str, np.ndarray], fixture: dict[str, np.ndarray], du
                           "MAEKF (paper) vs EKF", "ECUKF (paper) vs EKF", "MAEKF (ours) vs EKF",
                           "ECUKF (ours) vs EKF"),
                  rows=tuple(rows),
-                 note="Every filter on the same detections (`simulator.reproduce.road_replay`): the paper's two radars "
+                 note="Every filter on the same detections (`simulator.reproduce.road_replay`; the sine road: the "
+                      "first evaluation seeds only, a reference row on which no verdict rests): the paper's two radars "
                       "(20 m / 7°, 30 m / 5°, 2 Hz), 100 m up, circling the car at 500 m and 40 m/s, 180° apart, each "
                       "UAV fusing its estimate with its teammate's; Table I's Singer model. The car drives "
                       f"{duration:.0f} s of a stop-and-go schedule (up to 12 m/s, 1 m/s²) along one road. Seeded "

@@ -123,16 +123,16 @@ def reproduce(ctx: ReproContext) -> PaperReport:
     guidance = {n: _guidance(ctx, reports, c, idx) for n, c in TABLE_III.items()}
     curve, fixture, replay_s = _replays(ctx)
     town = {n: _col(runs[c], _metric("position_error_mean_m", None), town_idx) for n, c in TOWN.items()}
-    res = Results(pos=pos, guidance=guidance, curve=curve, town=town)
+    split_dirs = {n: [ctx.out_dir / "campaigns" / c / reports[c][i].run_dir for i in idx]
+                  for n, c in (("EKF fused", "ekf_nmpc"), ("MAEKF fused, road", "maekf_nmpc"),
+                               ("ECUKF fused, road", "ecukf_nmpc"), ("ECUKF fused, road (ours)", "ecukf_ours_nmpc"))}
+    t_split, split = tables.error_split(split_dirs)
+    res = Results(pos=pos, guidance=guidance, curve=curve, town=town, split=split)
 
     from simulator.reproduce.paper_002_traffic import traffic_section
 
     t_traffic, f_traffic, n_traffic = traffic_section(ctx, paper_runs={
         "ekf": runs["town_ekf"], "ukf": runs["town_ukf"], "maekf": runs["town_maekf"], "ecukf": runs["town_ecukf"]})
-    split_dirs = {n: [ctx.out_dir / "campaigns" / c / reports[c][i].run_dir for i in idx]
-                  for n, c in (("EKF fused", "ekf_nmpc"), ("MAEKF fused, road", "maekf_nmpc"),
-                               ("ECUKF fused, road", "ecukf_nmpc"), ("ECUKF fused, road (ours)", "ecukf_ours_nmpc"))}
-    t_split = tables.error_split(split_dirs)
     wall = float(sum(r.wall_time_s for reps in reports.values() for r in reps.values()))
     all_tables = (tables.table_ii(res, vel, len(idx)), t_split, tables.curve_table(curve, fixture, replay_s),
                   tables.table_iii(res, len(idx)), _solver_table(runs, idx), tables.town_table(town, len(town_idx)),

@@ -97,27 +97,31 @@ def town_table(town: dict[str, np.ndarray], runs: int) -> Table:
                       "filters (defaults) and our NMPC.")
 
 
-def error_split(dirs: dict[str, list[Path]]) -> Table | None:
-    """Along / across-road split of the fused error per column (``dirs``: column → run directories, paired)."""
+def error_split(dirs: dict[str, list[Path]]) -> tuple[Table | None, dict[str, dict[str, float]]]:
+    """Along / across-road split of the fused error per column (``dirs``: column → run directories, paired): the
+    table (None without a run every column could split) and per column the mean over runs of ``along_rms`` and
+    ``cross_rms`` (m)."""
     from simulator.reproduce.road_error import split_run
 
     per = {n: [split_run(d) for d in ds] for n, ds in dirs.items()}
     n_runs = min(len(v) for v in per.values())
     both = [i for i in range(n_runs) if all(per[n][i] is not None for n in per)]
     if not both:
-        return None
+        return None, {}
     rows = []
+    means: dict[str, dict[str, float]] = {}
     for n in per:
         sp = [per[n][i] for i in both]
         rows.append((n, *(mean_ci([getattr(s, k) for s in sp]).text()
                           for k in ("along_rms", "cross_rms", "along_mean", "cross_mean"))))
+        means[n] = {k: float(np.mean([getattr(s, k) for s in sp])) for k in ("along_rms", "cross_rms")}
     return Table(title="Where the fused position error lies: along or across the road (m), road_standoff_paper",
                  columns=("column", "RMS along", "RMS across", "mean along (bias)", "mean across (bias)"),
                  rows=tuple(rows),
                  note=f"Each fused estimate's error in the car's frame (along: positive ahead of the car; across: "
                       f"positive left), over the {len(both)} runs every column could split "
                       "(`simulator.reproduce.road_error`); mean ± 95 % CI over runs. A road constraint acts directly "
-                      "on the across-road part only.")
+                      "on the across-road part only."), means
 
 
 def figure(out_dir: Path, res: Results) -> Figure:

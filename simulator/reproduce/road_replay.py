@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ESTIMATORS", "PAPER_RADARS", "SCAN_DT", "STOP_AND_GO", "ReplayCase", "ReplayJob", "car_accel_rms", "drive",
+__all__ = ["ESTIMATORS", "PAPER_FILTERS", "PAPER_RADARS", "curve_case", "curve_network",
+           "SCAN_DT", "STOP_AND_GO", "ReplayCase", "ReplayJob", "car_accel_rms", "drive",
            "car_route", "fused_errors", "recorded_case", "route_network", "run_job", "sine_network",
            "single_road_case", "speeds", "synthetic_scans", "town_truth"]
 
@@ -139,19 +140,24 @@ def synthetic_scans(ts: np.ndarray, ps: np.ndarray, rng: np.random.Generator, *,
 
 def _paper_estimator(network: Any) -> Callable[[str, int, dict], Any]:
     """Paper 002's estimators (Table I's Singer model; road filters on ``network``) by type, as the world builds
-    them."""
+    them: ``maekf`` / ``ecukf`` with the road filters' defaults (our additions), ``maekf_paper`` / ``ecukf_paper``
+    with the paper's filters (:data:`simulator.reproduce.paper_002_configs.PAPER_ROAD`)."""
     from dataclasses import replace
 
     from autonomy.estimation.road.config import RoadFilterConfig
     from autonomy.estimation.road.tracker import RoadConstrainedTracker, RoadTrackerConfig
     from autonomy.estimation.tracker import SingleTargetTracker
+    from simulator.builders.common import config_from
     from simulator.builders.estimators import ROAD_FALLBACK_FILTER
+    from simulator.reproduce.paper_002_configs import PAPER_ROAD
 
     def make(kind: str, index: int, params: dict) -> Any:
         base = replace(RoadTrackerConfig().tracker, **params)
-        if kind in ROAD_FALLBACK_FILTER:
-            return RoadConstrainedTracker(RoadTrackerConfig(tracker=replace(base, filter=ROAD_FALLBACK_FILTER[kind]),
-                                                            road=RoadFilterConfig(variant=kind)), network)
+        variant, _, paper = kind.partition("_")
+        if variant in ROAD_FALLBACK_FILTER:
+            road = config_from(RoadFilterConfig, PAPER_ROAD if paper else {}, variant=variant)
+            return RoadConstrainedTracker(RoadTrackerConfig(
+                tracker=replace(base, filter=ROAD_FALLBACK_FILTER[variant]), road=road), network)
         return SingleTargetTracker(replace(base, filter=kind))
 
     return make
@@ -161,6 +167,37 @@ def _convex_fusion(index: int) -> Any:
     from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
 
     return TrackFusion(TrackFusionConfig(method="convex"))
+
+
+def curve_network(seed: int) -> Any:
+    """A seeded curved one-way arterial (the evaluation scenes; :func:`sine_network` is the tuning and unit-test
+    fixture): vertices every 10 m over 2 km along x on a sum of three sines (wavelengths 300–900 m, random phases),
+    scaled so that ``Σ A_k (2π/λ_k)² = 1/60`` m⁻¹ (radius >= 60 m) with amplitudes of at most 200 m in all."""
+    from worlds.roads.network import RoadNetwork
+
+    rng = np.random.default_rng([seed, 2002])
+    lam = rng.uniform(300.0, 900.0, 3)
+    amp = rng.uniform(0.3, 1.0, 3)
+    phase = rng.uniform(0.0, 2 * np.pi, 3)
+    amp *= min((1.0 / 60.0) / float(np.sum(amp * (2 * np.pi / lam) ** 2)), 200.0 / float(np.sum(amp)))
+    x = np.arange(0.0, 2000.0 + 1e-9, 10.0)
+    y = np.sum(amp[:, None] * np.sin(2 * np.pi * x[None] / lam[:, None] + phase[:, None]), axis=0)
+    return RoadNetwork.from_spec({"nodes": {"a": [0.0, float(y[0])], "b": [x[-1], float(y[-1])]},
+                                  "streets": [{"id": "s", "nodes": ["a", "b"], "via": np.c_[x, y][1:-1].tolist(),
+                                               "two_way": False}]})
+
+
+def curve_case(seed: int, duration: float = 150.0) -> ReplayCase:
+    """The single-road car (:data:`STOP_AND_GO`) on :func:`curve_network` ``(seed)``, the paper's radars at 500 m
+    (noise from ``seed`` too, another stream)."""
+    net = curve_network(seed)
+    substeps = 20
+    ts, ps, _ = drive([net.roads["s.f"]], duration, STOP_AND_GO, substeps=substeps)
+    scans = synthetic_scans(ts, ps, np.random.default_rng([seed, 1]))
+    h = SCAN_DT / substeps
+    accel = np.diff(speeds(duration, h, STOP_AND_GO)) / h
+    return ReplayCase(network=net, times=[ts, ts], scans=scans, truth=ps, estimator=_paper_estimator(net),
+                      fusion=_convex_fusion, accel_rms=float(np.sqrt(np.mean(accel**2))))
 
 
 def single_road_case(seed: int, duration: float = 150.0) -> ReplayCase:
@@ -334,6 +371,9 @@ def fused_errors(case: ReplayCase, kind: str, tracker_params: dict | None = None
 ESTIMATORS = ("ekf", "maekf", "ecukf")
 """The estimator types every experiment compares: the unconstrained EKF and the two road-constrained filters."""
 
+PAPER_FILTERS = ("ekf", "maekf_paper", "ecukf_paper", "maekf", "ecukf")
+"""The paper's road filters beside ours (``filters`` of a :class:`ReplayJob`)."""
+
 
 @dataclass(frozen=True)
 class ReplayJob:
@@ -348,6 +388,7 @@ class ReplayJob:
     run_dir: str | None = None
     sigma_a: float | None = None
     duration: float = 150.0
+    filters: tuple[str, ...] = ESTIMATORS
 
 
 def run_job(job: ReplayJob) -> dict[str, Any]:
@@ -360,13 +401,15 @@ def run_job(job: ReplayJob) -> dict[str, Any]:
     try:
         return _run_job(job)
     except Exception as exc:  # reported by the caller, never hidden
-        keys = [*ESTIMATORS, *(f"{k}@sigma_a" for k in ESTIMATORS if job.sigma_a is not None), "accel_rms"]
+        keys = [*job.filters, *(f"{k}@sigma_a" for k in job.filters if job.sigma_a is not None), "accel_rms"]
         return {**{k: float("nan") for k in keys}, "error": f"{type(exc).__name__}: {exc}"}
 
 
 def _run_job(job: ReplayJob) -> dict[str, Any]:
     if job.case == "single_road":
         case = single_road_case(job.seed, job.duration)
+    elif job.case == "curve":
+        case = curve_case(job.seed, job.duration)
     elif job.case in ("town_paper", "town_paper_route"):
         net, ts, ps, accel = town_truth(job.run_dir)
         if job.case == "town_paper_route":
@@ -376,12 +419,14 @@ def _run_job(job: ReplayJob) -> dict[str, Any]:
     elif job.case == "recorded":
         case = recorded_case(job.run_dir)
     else:
-        raise ValueError(f"ReplayJob.case must be single_road, town_paper, town_paper_route or recorded, "
+        raise ValueError(f"ReplayJob.case must be single_road, town_paper, town_paper_route, recorded or "
+                         f"curve, "
                          f"got {job.case!r}")
-    out = {kind: float(np.mean(fused_errors(case, kind)["fused"])) for kind in ESTIMATORS}
+    out = {kind: float(np.mean(fused_errors(case, kind)["fused"])) for kind in job.filters}
     if job.sigma_a is not None:
         model = {"singer_sigma_a": job.sigma_a}
-        out.update({f"{kind}@sigma_a": float(np.mean(fused_errors(case, kind, model)["fused"])) for kind in ESTIMATORS})
+        out.update({f"{kind}@sigma_a": float(np.mean(fused_errors(case, kind, model)["fused"]))
+                    for kind in job.filters})
     out["accel_rms"] = case.accel_rms
     return out
 

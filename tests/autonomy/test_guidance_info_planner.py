@@ -234,3 +234,10 @@ def test_per_uav_estimates_steer_each_uav_by_its_own():
         TeamInfoPlanner(cfg).plan(p, chi, np.zeros((3, 2)), np.zeros((3, 2)))
     with pytest.raises(ValueError, match="per-UAV target estimates need the sequential search"):
         TeamInfoPlanner(InfoPlannerConfig(search="joint")).plan(p, chi, np.array([tgt, tgt]), np.zeros((2, 2)))
+
+
+def test_evaluate_with_a_varying_uav_needs_the_candidates_in_order():
+    planner = TeamInfoPlanner(InfoPlannerConfig())
+    paths = np.zeros((5, 2, 3, 2))
+    with pytest.raises(ValueError, match="needs the 343 candidate paths of that UAV in candidate order, got 5"):
+        planner.evaluate(paths, np.zeros((3, 2)), planner.config.default_prior_information(), vary=0)

@@ -185,7 +185,10 @@ packet draws). Scenario 5: N ∈ {(2, 3) if ctx.quick else N_SWEEP}, {sweep_runs
             "Our configuration (team, team_B, team_chain) is not the paper's: it credits each UAV with the team's "
             "information and uses the log-det of the base's predicted information (the paper's trace is nearly flat "
             "in range at its noise values, so its eq. 42 keeps the UAVs near the base). Its findings are listed "
-            "apart.",
+            "apart. Its log-det starts from the base's expected information (the β-weighted recursion along the flown "
+            "positions, which every UAV can compute); the paper's trace objective needs no prior.",
+            "Each UAV plans from its own local estimate (the paper's scheme: no fused estimate is sent back); in the "
+            "sequential search UAV i scores the team's candidates on its own predicted track.",
             f"Scenario 5 uses N ∈ {(2, 3) if ctx.quick else N_SWEEP} and {sweep_runs} runs per N (the paper: every "
             "N from 2 to 10, 100 runs): "
             "a run of ten UAVs costs ≈ 50 s per variant.",

@@ -5,6 +5,9 @@ Configurations (``--set`` variants of the world, its header): scenario 1 with co
 without (B: β dropped from every UAV's objective, packets still lost); scenario 2 (parked car) over the minimum
 spanning tree and over the fixed relay chain; scenario 3 (three UAVs). Each runs ``min(ctx.runs, PHYSICS_RUNS)``
 seeded runs; A and B, and MST and chain, share their run seeds (same campaign seed), so their differences are paired.
+The world flies our team log-det planner (its B drops β from the same objective), so every finding here is the
+paper's claim judged on our configuration (``paper_faithful=False``), by the rules of :mod:`simulator.reproduce.rules`
+(paired intervals by run seed, Clopper–Pearson for the share of runs whose relay roles swap).
 
 The world is the paper's scaled in length by :data:`SCALE` (errors ×0.2; β, times and angles unchanged), so the
 paper's errors are compared after the same scaling. From each run's record (:func:`simulator.runrecord.load_run`),

@@ -239,7 +239,7 @@ def physics_cross_check(ctx: ReproContext) -> tuple[tuple[Table, ...], tuple[Fin
 
     paper2 = {"A": (1.2778, 3.4806, 1.9570, 0.8858, 0.8056), "B": (1.6287, 2.4619, 1.9565, 0.7359, 0.6203)}
     rows = []
-    for v, name in (("A", "A: with comm. optimisation"), ("B", "B: without")):
+    for v, name in (("A", "A: our team log-det over the MST"), ("B", "B: our team log-det, β ≡ 1")):
         cfg, p = ("1", v), paper2[v]
         rows.append((name, str(len(phys[cfg])), cell(s * p[0], col(cfg, lambda r: r["base_error"])),
                      *(cell(s * p[1 + k], col(cfg, lambda r, k=k: r["uav_error"][k])) for k in (0, 1)),

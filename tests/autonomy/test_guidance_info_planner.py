@@ -196,3 +196,48 @@ def test_guidance_flies_in_the_kinematic_loop():
     assert np.all(np.abs(res.u[:, :, 1]) <= 0.5 + 1e-12)
     assert res.min_separation() > 25.0
     assert res.ranges[-10:].min() < 0.5 * res.ranges[0].max()  # someone went to look at the target
+
+
+@pytest.mark.parametrize("kw", [{}, {"criterion": "trace", "objective": "own"}, {"routing": "chain"},
+                                {"routing": "none"}])
+def test_evaluate_with_one_varying_uav_gives_the_same_numbers(kw):
+    """The sequential search's shortcut (links and information of the fixed UAVs computed once) changes no bit."""
+    rng = np.random.default_rng(3)
+    planner = TeamInfoPlanner(InfoPlannerConfig(**kw))
+    n = 4
+    p, chi = rng.uniform(-1000, 1000, (n, 2)), rng.uniform(-3, 3, n)
+    cand = np.stack([arc_paths(p[i], chi[i], planner.candidate_rates, 50.0, 1.0)[0] for i in range(n)])
+    choice = rng.integers(0, len(planner.candidate_rates), n)
+    tgt = np.array([[-800.0, 0.0], [-790.0, -3.0], [-780.0, -6.0]])
+    Y0 = planner.config.default_prior_information()
+    for i in range(n):
+        team = np.array(cand[np.arange(n), choice][None].repeat(len(cand[i]), axis=0))
+        team[:, i] = cand[i]
+        w = rng.uniform(0.0, 1.0, n)
+        full, fast = planner.evaluate(team, tgt, Y0, w), planner.evaluate(team, tgt, Y0, w, vary=i)
+        assert np.array_equal(full[0], fast[0]) and np.array_equal(full[1], fast[1])
+
+
+def test_per_uav_estimates_steer_each_uav_by_its_own():
+    """With one estimate per UAV, UAV i scores its candidates on its own predicted track: identical estimates give the
+    shared plan; a UAV told the target lies elsewhere plans differently."""
+    cfg = InfoPlannerConfig(objective="own", criterion="trace", routing="none", d_safe=0.0)
+    p, chi = np.array([[0.0, 0.0], [0.0, 500.0]]), np.zeros(2)
+    tgt, v = np.array([60.0, 0.0]), np.zeros(2)
+    shared = TeamInfoPlanner(cfg).plan(p, chi, tgt, v)
+    same = TeamInfoPlanner(cfg).plan(p, chi, np.array([tgt, tgt]), np.zeros((2, 2)))
+    np.testing.assert_array_equal(shared.heading_rates, same.heading_rates)
+    moved = TeamInfoPlanner(cfg).plan(p, chi, np.array([[-60.0, 0.0], tgt]), np.zeros((2, 2)))
+    assert not np.array_equal(moved.heading_rates[0], shared.heading_rates[0])
+    np.testing.assert_array_equal(moved.heading_rates[1], shared.heading_rates[1])
+    with pytest.raises(ValueError, match="one row per UAV \\(2\\), got 3 positions"):
+        TeamInfoPlanner(cfg).plan(p, chi, np.zeros((3, 2)), np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="per-UAV target estimates need the sequential search"):
+        TeamInfoPlanner(InfoPlannerConfig(search="joint")).plan(p, chi, np.array([tgt, tgt]), np.zeros((2, 2)))
+
+
+def test_evaluate_with_a_varying_uav_needs_the_candidates_in_order():
+    planner = TeamInfoPlanner(InfoPlannerConfig())
+    paths = np.zeros((5, 2, 3, 2))
+    with pytest.raises(ValueError, match="needs the 343 candidate paths of that UAV in candidate order, got 5"):
+        planner.evaluate(paths, np.zeros((3, 2)), planner.config.default_prior_information(), vary=0)

@@ -54,6 +54,9 @@ class DecoyEpisodes:
         Steps from birth to erasure of the erased judged episodes.
     boxes : int
         Decoy-born boxes (detections of a decoy), over all UAVs and steps.
+    entered : int
+        Of these, the boxes that put some area into a UAV's ``X`` (a box over ground already proven free of targets
+        is discarded by the correction itself: the decoy is told apart by the prediction, eq. 8).
     """
 
     started: int
@@ -61,6 +64,7 @@ class DecoyEpisodes:
     erased: int
     durations: tuple[int, ...] = ()
     boxes: int = 0
+    entered: int = 0
 
 
 @dataclass
@@ -74,6 +78,7 @@ class DecoyProvenance:
     born: dict[int, int] = field(default_factory=dict)
     episodes: list[tuple[int, int | None]] = field(default_factory=list)
     boxes: int = 0
+    entered: int = 0
 
     def observe(self, mission: object) -> None:
         """Advance every decoy's region by one step of ``mission`` (its ``k``, ``last_scans``, ``estimators``)."""
@@ -89,6 +94,10 @@ class DecoyProvenance:
                     new[int(tid)].append(pg.intersection_all([shapely.box(*lo, *hi), region]))
                     self.boxes += 1
         Xs = [e.estimate.X for e in mission.estimators]
+        for j in decoys:
+            for B in new[j]:
+                if any(pg.area(pg.intersection_all([B, X])) > MIN_AREA for X in Xs if not X.is_empty):
+                    self.entered += 1
         for j in decoys:
             D = self.regions.get(j, pg.EMPTY)
             parts = ([pg.dilate(D, self.radius)] if not D.is_empty else []) + new[j]
@@ -109,4 +118,5 @@ class DecoyProvenance:
         judged = [(b, e) for b, e in eps if b <= self.steps - CENSOR_STEPS]
         erased = [(b, e) for b, e in judged if e is not None]
         return DecoyEpisodes(started=len(eps), judged=len(judged), erased=len(erased),
-                             durations=tuple(int(e - b) for b, e in erased), boxes=self.boxes)
+                             durations=tuple(int(e - b) for b, e in erased), boxes=self.boxes,
+                             entered=self.entered)

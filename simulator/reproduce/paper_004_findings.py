@@ -115,8 +115,10 @@ def _decoy_findings(res: Results, name: str, faithful: bool) -> list[Finding]:
     out = [Finding.judged(
         f"A decoy is taken for a target: a measurement box born of a decoy enters X, in a typical run{tag}",
         rules.rate_at_least(seen, len(rs), TYPICAL), paper=P_DECOY, paper_faithful=faithful,
-        why=f"runs with a decoy-born box in some UAV's X: {seen} of {len(rs)}; {boxes} decoy-born boxes in all "
-            f"(rule: at least half the runs, the paper's \"typical\")")]
+        why=f"runs with a decoy-born box in some UAV's X: {seen} of {len(rs)}; {boxes} detections of a decoy in all, "
+            f"{int(np.sum([r.decoys.entered for r in rs]))} of them overlap some UAV's X after their step (the "
+            "others fell on ground already proven free of targets, discarded by the correction) (rule: at least half "
+            "the runs, the paper's \"typical\")")]
     med = f"; median {np.median(durations):.0f} steps from birth to erasure" if durations.size else ""
     out.append(Finding.judged(
         f"The decoy-born subsets of X are erased by a later view{tag}",

@@ -81,6 +81,9 @@ def test_rules_and_figures_of_the_paper_claims():
     assert "median 7 steps from birth to erasure" in erased.why
     assert _by_claim(fs, "A decoy is taken")[0].ours.startswith(f"{N}/{N} = 1")
     assert "0.035 at k = 400" in _by_claim(fs, "φ(X)/φ(X0) is 0.035")[0].paper
+    assert "regrows" not in _by_claim(fs, "X̄ is very close to empty")[0].why
+    bad = _by_claim(findings(_results(good=False)), "X̄ is very close to empty")[0].why
+    assert "X̄ regrows by 6010 m²/s on average while the four footprints sweep 5520 m²/s" in bad
 
 
 def test_sensitivity_findings_are_not_paper_faithful_and_extensions_not_paper_claims():

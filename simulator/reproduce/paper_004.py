@@ -119,7 +119,7 @@ def _tables(runs: dict[str, list[RunSummary]], labels: dict[str, str], sides: di
         }
 
     rows_spec = (
-        ("xbar100", "φ(X̄)/φ(X0) at step 100", "–"),
+        ("xbar100", f"φ(X̄)/φ(X0) at step {min(100, steps)}", "–"),
         ("xbar", f"φ(X̄)/φ(X0) at step {mid}", "≈ 0" if mid == MID else "–"),
         ("empty", f"runs where X̄ fell below {EMPTY:g} of the area", "–"),
         ("x", f"φ(X)/φ(X0) at step {last}", "0.035" if last == LAST else "–"),
@@ -218,7 +218,13 @@ their cones.
             "J_d pulls towards argmin d/φ (the paper's stated intent, \"the closest set estimate with a large "
             "volume\"); its printed argmin φ·d, which favours small components, is a sensitivity column. The "
             "distance is to the set (0 inside), not the Hausdorff distance the paper names.",
+            "The cost's terms are normalised (areas by φ(X_s), distances by √φ(X_s)) so the paper's weights compare "
+            "like terms; the paper does not say how it scales them.",
             "Predicted sets of the MPC: the two-step prediction is over-approximated (planner docstring).",
+            "Sets above 600 vertices are replaced by an outer simplification (the guarantee is kept); the paper's "
+            "polyshapes are exact.",
+            "Targets and decoys whose move would leave the free area redraw their turn (then reverse, then wait): "
+            "the paper does not say how they stay inside.",
             "UAV starts: uniform in the free area, redrawn until their ±45° loiters keep 6 m from the obstacles "
             "(the paper gives no starts); the same starts in every configuration.",
             "Random worlds per run (the paper's obstacle layout is not given); decoys move like targets, each "

@@ -30,7 +30,7 @@ __all__ = ["D_COL", "PRIMARY", "QUICK", "RunSummary", "SENS_RUNS", "VARIANTS", "
 
 D_COL = 5.0  # m, the paper's collision distance
 QUICK = {"steps": 20, "n_uavs": 2}
-SENS_RUNS = 20
+SENS_RUNS = 10
 """Runs of each configuration other than the paper's (its first seeds): the paper ran 100 missions of its own
 configuration only; these are sensitivity studies, paired with the paper's configuration on the same seeds."""
 START_TURN = np.pi / 4  # rad, the loiter turn of the safe-start check, the same in every configuration

@@ -24,6 +24,7 @@ paper reports except run time, which benchmarks measure.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -74,6 +75,9 @@ class MissionConfig:
     safe_starts : bool
         Redraw UAV starts until their maximum-turn loiters keep ``search.d_col + search.clearance_margin`` from
         the obstacles (module docstring); needed by the planner's safe-loiter induction.
+    start_turn : float | None
+        Turn bound (rad) of the loiters the safe-start check tests; ``None``: ``search.max_turn``. Pinning it keeps
+        the starts of missions that differ only in their planner's turn bound the same.
     """
 
     area_size: tuple[float, float] = (500.0, 500.0)
@@ -90,6 +94,7 @@ class MissionConfig:
     movers: MoverConfig = field(default_factory=MoverConfig)
     sensor: BoxSensorConfig = field(default_factory=BoxSensorConfig)
     safe_starts: bool = True
+    start_turn: float | None = None
 
     def __post_init__(self) -> None:
         if not all(s > 0 for s in self.area_size):
@@ -108,6 +113,8 @@ class MissionConfig:
                 f"MissionConfig: movers.speed {self.movers.speed} m/s exceeds the estimator's bound "
                 f"{self.estimator.max_target_speed} m/s"
             )
+        if self.start_turn is not None and not (0 < self.start_turn <= np.pi):
+            raise ValueError(f"MissionConfig.start_turn must be in (0, pi] rad, got {self.start_turn}")
         if abs(self.movers.dt - self.search.dt) > 1e-12:
             raise ValueError(f"MissionConfig: movers.dt {self.movers.dt} s must equal search.dt {self.search.dt} s")
 
@@ -185,12 +192,23 @@ class SearchMission:
     config : MissionConfig
         Mission parameters.
     rng : np.random.Generator
-        Source of all randomness (scenario, motion, sensor noise, random control).
+        Source of all randomness (scenario, motion, sensor noise, random control) unless one of the three below is
+        given.
+    motion_rng, noise_rng, control_rng : np.random.Generator | None
+        Separate sources of the targets' and decoys' motion, the sensors' noise and the random turns (``None``:
+        ``rng``). With its own motion stream the movers follow the same paths whatever the UAVs do, so missions
+        that differ only in their control see the same targets (common random numbers).
     """
 
-    def __init__(self, config: MissionConfig, rng: np.random.Generator):
+    def __init__(self, config: MissionConfig, rng: np.random.Generator, *,
+                 motion_rng: np.random.Generator | None = None, noise_rng: np.random.Generator | None = None,
+                 control_rng: np.random.Generator | None = None):
         self.config = config
         self.rng = rng
+        self.motion_rng = rng if motion_rng is None else motion_rng
+        self.noise_rng = rng if noise_rng is None else noise_rng
+        self.control_rng = rng if control_rng is None else control_rng
+        self.last_scans: list = []
         W, H = config.area_size
         self.area = shapely.box(0.0, 0.0, W, H)
         self.buildings = random_cuboids(rng, (0.0, 0.0, W, H), config.n_obstacles, config.obstacle_sides,
@@ -217,7 +235,8 @@ class SearchMission:
     def _redraw_unsafe_starts(self, margin: float, max_tries: int = 10000) -> None:
         """Redraw each UAV start (position, heading) whose state is not safe (module docstring)."""
         s = self.config.search
-        safety = LoiterSafety(speed=s.speed, dt=s.dt, max_turn=s.max_turn, required=s.d_col + s.clearance_margin,
+        turn = s.max_turn if self.config.start_turn is None else self.config.start_turn
+        safety = LoiterSafety(speed=s.speed, dt=s.dt, max_turn=turn, required=s.d_col + s.clearance_margin,
                               obstacles=self.obstacles)
         if not safety.active:
             return
@@ -234,7 +253,7 @@ class SearchMission:
         cfg = self.config
         if cfg.control == "random":
             s = cfg.search
-            u = self.rng.uniform(-s.max_turn, s.max_turn, size=cfg.n_uavs)
+            u = self.control_rng.uniform(-s.max_turn, s.max_turn, size=cfg.n_uavs)
             # outside the area, turn back towards its centre as fast as allowed
             centre = np.asarray(self.area.centroid.coords[0])
             outside = ~shapely.contains_xy(self.area, self.uav_xy[:, 0], self.uav_xy[:, 1])
@@ -253,21 +272,25 @@ class SearchMission:
         self.uav_heading = self.uav_heading + u
         self.uav_xy = self.uav_xy + s.speed * s.dt * np.column_stack([np.cos(self.uav_heading),
                                                                        np.sin(self.uav_heading)])
-        self.movers.step(self.rng)
+        self.movers.step(self.motion_rng)
         self.k += 1
         t = self.k * s.dt
         truth = self.movers.truth()
+        self.last_scans = []
         for i, est in enumerate(self.estimators):
             pose = SensorPose(p_W=np.array([*self.uav_xy[i], s.altitude]), q_WB=yaw_quaternion(self.uav_heading[i]))
-            out = self.sensor.measure(t, pose, truth, self.scene, self.rng)
+            out = self.sensor.measure(t, pose, truth, self.scene, self.noise_rng)
+            self.last_scans.append(out)
             est.predict(t)
             est.update(out.extras["observed_region"], out.detections)
         links = line_of_sight_graph(self.uav_xy, self.obstacles)
         fuse_team_sets(self.estimators, links)
         return links
 
-    def run(self) -> MissionResult:
-        """Run all steps and collect the result."""
+    def run(self, on_step: Callable[[SearchMission], None] | None = None) -> MissionResult:
+        """Run all steps and collect the result; ``on_step(self)``, when given, is called after each step (after
+        fusion), when ``last_scans`` holds the step's sensor outputs, one per UAV (an observer: it must not change
+        the mission)."""
         cfg = self.config
         n, steps = cfg.n_uavs, cfg.steps
         is_target = self.movers.is_target
@@ -284,6 +307,8 @@ class SearchMission:
         for k in range(steps):
             before = self.uav_xy.copy()
             links = self.step(links)
+            if on_step is not None:
+                on_step(self)
             unsafe[k] = self.unsafe
             links_n[k] = int(np.sum(np.triu(links, 1)))
             p = self.movers.p_xy

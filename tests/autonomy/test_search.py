@@ -79,6 +79,18 @@ def test_distance_term_pulls_towards_a_remote_set():
     assert dec.terms["J_d"] > 0
 
 
+@pytest.mark.parametrize(("choice", "west"), [("near_large", False), ("paper", True)])
+def test_component_choice_of_the_distance_term(choice, west):
+    """A small patch of X 148 m west, a large one 200 m east, both out of the footprints' reach: the default pulls
+    towards the large one (argmin d/φ), the paper's printed formula (argmin φ·d) towards the small one."""
+    pl = planner(cfg=SearchConfig(component_choice=choice))
+    X = shapely.union_all([shapely.box(100, 248, 104, 252), shapely.box(450, 225, 500, 275)])
+    dec = pl.decide(np.array([250.0, 250.0]), np.pi / 2, SetEstimate(t=0.0, X=X, Xbar=pg.EMPTY))
+    assert (dec.u > 0) == west and dec.u != 0
+    with pytest.raises(ValueError, match=r"component_choice must be near_large\|paper, got 'x'"):
+        SearchConfig(component_choice="x")
+
+
 def test_avoids_an_obstacle_ahead():
     b = Building.cuboid((250, 300), (60, 60, 100))
     pl = planner([b])

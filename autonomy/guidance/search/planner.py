@@ -17,7 +17,8 @@ comparable:
 - ``J_d = [phi(X_j) d(X_j, p_{k+h}) + phi(Xbar) d(Xbar, p_{k+h})] / (phi(X_s) L)`` (eq. 21), ``d`` the distance from
   the point to the set (0 inside). The paper selects ``j = argmin_l phi(X_l) d(p_k, X_l)``, which favours *small*
   components; its stated intent (drive the UAV to the closest set with a large area) is implemented here as
-  ``j = argmin_l d(p_k, X_l) / phi(X_l)``;
+  ``j = argmin_l d(p_k, X_l) / phi(X_l)`` (``SearchConfig.component_choice = "near_large"``, the default;
+  ``"paper"`` takes the paper's formula as printed);
 - ``J_s = 1/2 [1 - tanh((d_obs(p_{k+h}) - alpha_s1) / alpha_s2)]`` (eq. 22), ``d_obs`` the horizontal distance to
   the nearest obstacle footprint.
 
@@ -55,7 +56,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 import shapely
@@ -118,6 +119,9 @@ class SearchConfig:
         False: the paper's planner, clearance left to ``J_s``.
     clearance_margin : float
         Margin over ``d_col`` the safe loiters keep from every obstacle (m), >= 0.
+    component_choice : {"near_large", "paper"}
+        Which component of ``X`` the distance term ``J_d`` pulls towards: ``argmin d / phi`` (the paper's stated
+        intent, the default) or ``argmin phi d`` (its formula as printed); module docstring.
     """
 
     speed: float = 60.0 / 3.6
@@ -138,6 +142,7 @@ class SearchConfig:
     altitude_gain: float = 1.0
     loiter_safety: bool = True
     clearance_margin: float = 1.0
+    component_choice: Literal["near_large", "paper"] = "near_large"
 
     def __post_init__(self) -> None:
         for name in ("speed", "altitude", "dt", "max_target_speed", "alpha_s2"):
@@ -151,6 +156,8 @@ class SearchConfig:
             raise ValueError(f"SearchConfig.max_turn must be in (0, pi] rad, got {self.max_turn}")
         if int(self.n_controls) != self.n_controls or self.n_controls < 3 or self.n_controls % 2 == 0:
             raise ValueError(f"SearchConfig.n_controls must be an odd integer >= 3, got {self.n_controls}")
+        if self.component_choice not in ("near_large", "paper"):
+            raise ValueError(f"SearchConfig.component_choice must be near_large|paper, got {self.component_choice!r}")
         if int(self.tail_steps) != self.tail_steps or self.tail_steps < 0:
             raise ValueError(f"SearchConfig.tail_steps must be an integer >= 0, got {self.tail_steps}")
         if int(self.horizon) != self.horizon or self.horizon < 1:
@@ -300,11 +307,21 @@ class SearchPlanner:
             speed=config.speed, dt=config.dt, max_turn=config.max_turn, required=config.d_col + config.clearance_margin,
             obstacles=self._obstacles, keep_in=keep_in,
         ) if config.loiter_safety else None
+        self._memo: dict[tuple[float, float, float], BaseGeometry] | None = None
 
     def region(self, p_xy: np.ndarray, yaw: float) -> BaseGeometry:
-        """Observed region from a horizontal position (m) and heading (rad) at the flight altitude."""
+        """Observed region from a horizontal position (m) and heading (rad) at the flight altitude.
+
+        Within :meth:`plan_team` the regions are remembered by pose: a UAV that decides after a neighbour reuses the
+        regions of the neighbour's chosen path, computed when the neighbour scored it (the same geometry)."""
+        key = (float(p_xy[0]), float(p_xy[1]), float(yaw))
+        if self._memo is not None and key in self._memo:
+            return self._memo[key]
         pose = SensorPose(p_W=np.array([p_xy[0], p_xy[1], self.config.altitude]), q_WB=yaw_quaternion(yaw))
-        return pg.as_polygonal(self.sensor.observed_region(pose))
+        out = pg.as_polygonal(self.sensor.observed_region(pose))
+        if self._memo is not None:
+            self._memo[key] = out
+        return out
 
     def obstacle_risk(self, p_xy: np.ndarray) -> np.ndarray:
         """``J_s`` (eq. 22) at points (N, 2) m; 0 without obstacles."""
@@ -322,7 +339,10 @@ class SearchPlanner:
         if comps:
             d_now = np.array([float(c.distance(shapely.Point(p_now))) for c in comps])
             areas = np.array([c.area for c in comps])
-            j = int(np.argmin(d_now / np.maximum(areas, 1e-9)))
+            if self.config.component_choice == "paper":
+                j = int(np.argmin(areas * d_now))
+            else:
+                j = int(np.argmin(d_now / np.maximum(areas, 1e-9)))
             out += areas[j] * pg.distance_to(comps[j], p_end) / (a0 * L)
         if not est.Xbar.is_empty:
             out += est.area_Xbar * pg.distance_to(est.Xbar, p_end) / (a0 * L)
@@ -405,7 +425,11 @@ class SearchPlanner:
                 f"plan_team needs matching sizes, got {P.shape}, {A.shape}, {len(estimates)}, {len(headings)}"
             )
         out: list[SearchDecision | None] = [None] * n
-        for i in decision_order(A):
-            decided = [out[j].path for j in range(n) if j != i and A[i, j] and out[j] is not None]
-            out[i] = self.decide(P[i], float(headings[i]), estimates[i], decided)
+        self._memo = {}
+        try:
+            for i in decision_order(A):
+                decided = [out[j].path for j in range(n) if j != i and A[i, j] and out[j] is not None]
+                out[i] = self.decide(P[i], float(headings[i]), estimates[i], decided)
+        finally:
+            self._memo = None
         return [d for d in out if d is not None]

@@ -49,3 +49,33 @@ def test_mission_decoys_taken_then_erased(mpc_mission):
     for j in np.flatnonzero(d.any(axis=0)):
         first = int(np.argmax(d[:, j]))
         assert not d[first:, j].all(), f"decoy {j} never erased after step {first + 1}"
+
+
+def _streams(seed: int) -> dict:
+    world, motion, noise, control = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
+    return {"rng": world, "motion_rng": motion, "noise_rng": noise, "control_rng": control}
+
+
+def test_own_motion_stream_gives_the_same_movers_whatever_the_control():
+    small = {**SMALL, "steps": 6}
+    cfgs = [MissionConfig(control="mpc", **small), MissionConfig(control="random", **small),
+            MissionConfig(control="mpc", search=SearchConfig(max_turn=np.pi / 2), start_turn=np.pi / 4, **small)]
+    seen = []
+
+    def run(cfg):
+        s = _streams(11)
+        m = SearchMission(cfg, s.pop("rng"), **s)
+        starts = m.uav_xy.copy()
+        res = m.run(on_step=lambda mm: seen.append((cfg.control, mm.k, len(mm.last_scans))))
+        return starts, res
+
+    (s0, a), (s1, b), (s2, c) = (run(cfg) for cfg in cfgs)
+    assert np.array_equal(a.mover_xy, b.mover_xy) and np.array_equal(a.mover_xy, c.mover_xy)
+    assert np.array_equal(s0, s1) and np.array_equal(s0, s2)  # starts pinned by start_turn
+    assert not np.array_equal(a.uav_xy, b.uav_xy)
+    assert seen[:6] == [("mpc", k, 3) for k in range(1, 7)]
+
+
+def test_start_turn_is_validated():
+    with pytest.raises(ValueError, match=r"MissionConfig.start_turn must be in \(0, pi\] rad, got 0.0"):
+        MissionConfig(start_turn=0.0)

@@ -59,26 +59,27 @@ def _g(x: float, digits: int = 3) -> str:
     return f"{x:.{digits}g}"
 
 
-def all_below(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
-    """Every value is strictly below ``limit`` (a claim about every run or step: judged on the largest value)."""
-    rule = f"largest value < {_g(limit)}{unit}"
+def _worst(values: ArrayLike, limit: float, unit: str, below: bool) -> Judgement:
+    """Every value past ``limit`` (below it, or at least it), judged on the worst value."""
+    rule = f"largest value < {_g(limit)}{unit}" if below else f"smallest value ≥ {_g(limit)}{unit}"
     x = _finite(values)
     if x.size == 0:
         return _empty(rule)
-    worst = float(x.max())
-    return Judgement(verdict="reproduced" if worst < limit else "not reproduced", rule=rule,
-                     ours=f"largest {_g(worst)}{unit} over {x.size} values", runs=int(x.size))
+    worst = float(x.max() if below else x.min())
+    ok = worst < limit if below else worst >= limit
+    return Judgement(verdict="reproduced" if ok else "not reproduced", rule=rule,
+                     ours=f"{'largest' if below else 'smallest'} {_g(worst)}{unit} over {x.size} values",
+                     runs=int(x.size))
+
+
+def all_below(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
+    """Every value is strictly below ``limit`` (a claim about every run or step: judged on the largest value)."""
+    return _worst(values, limit, unit, below=True)
 
 
 def all_at_least(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
     """Every value is at least ``limit`` (judged on the smallest value)."""
-    rule = f"smallest value ≥ {_g(limit)}{unit}"
-    x = _finite(values)
-    if x.size == 0:
-        return _empty(rule)
-    worst = float(x.min())
-    return Judgement(verdict="reproduced" if worst >= limit else "not reproduced", rule=rule,
-                     ours=f"smallest {_g(worst)}{unit} over {x.size} values", runs=int(x.size))
+    return _worst(values, limit, unit, below=False)
 
 
 def _interval_verdict(lo: float, hi: float, limit: float, below: bool) -> Verdict:
@@ -95,27 +96,25 @@ def _bounds(x: np.ndarray) -> tuple[float, float, str]:
     return ci.mean - half, ci.mean + half, ci.text()
 
 
-def mean_below(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
-    """The mean over runs is below ``limit``: reproduced when the 95 % interval's upper end is below it, not
-    reproduced when its lower end is at or above it, inconclusive otherwise (and with one run)."""
-    rule = f"95 % interval of the mean below {_g(limit)}{unit}"
+def _mean(values: ArrayLike, limit: float, unit: str, below: bool) -> Judgement:
+    rule = f"95 % interval of the mean {'below' if below else '≥'} {_g(limit)}{unit}"
     x = _finite(values)
     if x.size == 0:
         return _empty(rule)
     lo, hi, text = _bounds(x)
-    return Judgement(verdict=_interval_verdict(lo, hi, limit, below=True), rule=rule,
+    return Judgement(verdict=_interval_verdict(lo, hi, limit, below=below), rule=rule,
                      ours=f"{text}{unit} over {x.size} runs", runs=int(x.size))
+
+
+def mean_below(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
+    """The mean over runs is below ``limit``: reproduced when the 95 % interval's upper end is below it, not
+    reproduced when its lower end is at or above it, inconclusive otherwise (and with one run)."""
+    return _mean(values, limit, unit, below=True)
 
 
 def mean_at_least(values: ArrayLike, limit: float, unit: str = "") -> Judgement:
     """The mean over runs is at least ``limit`` (the mirror of :func:`mean_below`)."""
-    rule = f"95 % interval of the mean ≥ {_g(limit)}{unit}"
-    x = _finite(values)
-    if x.size == 0:
-        return _empty(rule)
-    lo, hi, text = _bounds(x)
-    return Judgement(verdict=_interval_verdict(lo, hi, limit, below=False), rule=rule,
-                     ours=f"{text}{unit} over {x.size} runs", runs=int(x.size))
+    return _mean(values, limit, unit, below=False)
 
 
 def _pairs(a: ArrayLike, b: ArrayLike) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,7 @@ import numpy as np
 from scipy import stats
 
 from simulator.reproduce.report import Finding, mean_ci
-from simulator.reproduce.rules import (Judgement, mean_at_least, mean_below, paired_less, paired_within,
+from simulator.reproduce.rules import (Judgement, every, mean_at_least, mean_below, paired_less, paired_within,
                                        rate_at_least)
 
 __all__ = ["Runs", "Results", "findings", "all_of", "runs_to_resolve", "PAPER", "S3_BETA_BAND"]
@@ -73,19 +73,8 @@ class Results:
 
 
 def all_of(judgements: list[Judgement], rule: str) -> Judgement:
-    """A claim made of several parts: reproduced when every part is, not reproduced when any part is not, else
-    inconclusive (not comparable when any part is); ``ours`` lists the parts."""
-    verdicts = [j.verdict for j in judgements]
-    if not judgements or "not comparable" in verdicts:
-        verdict = "not comparable"
-    elif "not reproduced" in verdicts:
-        verdict = "not reproduced"
-    elif all(v == "reproduced" for v in verdicts):
-        verdict = "reproduced"
-    else:
-        verdict = "inconclusive"
-    return Judgement(verdict=verdict, rule=rule, ours="; ".join(f"{j.ours} ({j.verdict})" for j in judgements),
-                     runs=min((j.runs for j in judgements), default=0))
+    """A claim made of several parts (:func:`simulator.reproduce.rules.every`); ``ours`` lists the parts."""
+    return every(judgements, rule)
 
 
 def runs_to_resolve(diff: np.ndarray, effect: float) -> str:

@@ -8,14 +8,13 @@ only cases 1 and 2) give "not comparable".
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 
 import numpy as np
 
 from simulator.reproduce import rules
 from simulator.reproduce.paper_003_runs import MISMATCHED_RATES, PAPER, TURN_WINDOW_S, Results
 from simulator.reproduce.report import Finding
-from simulator.reproduce.rules import Judgement
+from simulator.reproduce.rules import Judgement, every
 
 __all__ = ["every", "kinematic_findings", "GAP_LIMIT", "SWITCH_RATE", "BASELINES"]
 
@@ -24,19 +23,6 @@ GAP_LIMIT = -math.log(0.9)
 SWITCH_RATE = 0.9
 """"The IMM switches at each turn": the share of runs whose CT mode passes 0.5 within the turn is at least this."""
 BASELINES = ("fixed", "trail", "random")
-_ORDER = ("not reproduced", "not comparable", "inconclusive", "reproduced")
-
-
-def every(parts: Mapping[str, Judgement]) -> Judgement:
-    """A claim that must hold for every part (case, turn): reproduced only when every part is, not reproduced when
-    any part is, else not comparable / inconclusive (in that order). No parts: not comparable."""
-    if not parts:
-        return Judgement(verdict="not comparable", rule="every part", ours="no configuration was run", runs=0)
-    verdict = min((j.verdict for j in parts.values()), key=_ORDER.index)
-    rule_texts = list(dict.fromkeys(j.rule for j in parts.values() if j.rule != "—")) or ["—"]
-    return Judgement(verdict=verdict, rule="in every one of " + ", ".join(parts) + ": " + "; ".join(rule_texts),
-                     ours="; ".join(f"{k}: {j.ours}" for k, j in parts.items()),
-                     runs=min(j.runs for j in parts.values()))
 
 
 def _missing(what: str) -> Judgement:

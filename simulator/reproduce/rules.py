@@ -18,7 +18,7 @@ rates (exact binomial). A paired rule drops a pair where either value is not fin
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +26,7 @@ from scipy import stats
 
 from simulator.reproduce.report import VERDICTS, Verdict, mean_ci
 
-__all__ = ["Judgement", "all_below", "all_at_least", "mean_below", "mean_at_least", "paired_less",
+__all__ = ["Judgement", "every", "all_below", "all_at_least", "mean_below", "mean_at_least", "paired_less",
            "paired_reduction_at_least", "paired_within", "rate_at_least", "clopper_pearson"]
 
 ArrayLike = Sequence[float] | np.ndarray
@@ -195,3 +195,24 @@ def rate_at_least(successes: int, trials: int, rate: float) -> Judgement:
     lo, hi = clopper_pearson(successes, trials)
     return Judgement(verdict=_interval_verdict(lo, hi, rate, below=False), rule=rule,
                      ours=f"{successes}/{trials} = {successes / trials:.3g} (95 % {lo:.3g}–{hi:.3g})", runs=int(trials))
+
+
+_WORST_FIRST = ("not reproduced", "not comparable", "inconclusive", "reproduced")
+
+
+def every(parts: Mapping[str, Judgement] | Sequence[Judgement], rule: str | None = None) -> Judgement:
+    """A claim that must hold in every part (case, turn, scenario): reproduced only when every part is; not reproduced
+    when any part is (whatever the others); else not comparable, else inconclusive. No parts: not comparable.
+
+    ``parts`` named (a mapping) give ``ours`` as ``name: figure`` and a default rule naming them; unnamed (a sequence)
+    give ``figure (verdict)`` per part and need ``rule``."""
+    named = isinstance(parts, Mapping)
+    items = list(parts.items()) if named else [(None, j) for j in parts]
+    if not items:
+        return Judgement(verdict="not comparable", rule=rule or "every part", ours="no part was run", runs=0)
+    verdict = min((j.verdict for _, j in items), key=_WORST_FIRST.index)
+    if rule is None:
+        texts = list(dict.fromkeys(j.rule for _, j in items if j.rule != "—")) or ["—"]
+        rule = "in every one of " + ", ".join(str(k) for k, _ in items) + ": " + "; ".join(texts)
+    ours = "; ".join(f"{k}: {j.ours}" if named else f"{j.ours} ({j.verdict})" for k, j in items)
+    return Judgement(verdict=verdict, rule=rule, ours=ours, runs=min(j.runs for _, j in items))

@@ -131,3 +131,19 @@ def test_run_seeds_are_common_to_variants_and_off_the_tuning_base(tmp_path):
     assert ctx.run_seeds(3) == ctx.run_seeds()[:3]
     assert ctx.seed != 1 and "not an evaluation" not in ctx.seeds_text()
     assert "not an evaluation" in ReproContext(out_dir=tmp_path, runs=1, seed=1).seeds_text()
+
+
+def test_every_part_must_hold_and_one_failed_part_fails_the_claim():
+    from simulator.reproduce.rules import Judgement, every
+
+    def j(v: str) -> Judgement:
+        return Judgement(verdict=v, rule="r", ours=v, runs=4)
+
+    assert every({"a": j("reproduced"), "b": j("reproduced")}).verdict == "reproduced"
+    assert every([j("reproduced"), j("inconclusive")], "both").verdict == "inconclusive"
+    # a failed part fails the claim even where another part could not be judged
+    assert every([j("not comparable"), j("not reproduced")], "both").verdict == "not reproduced"
+    assert every([j("reproduced"), j("not comparable")], "both").verdict == "not comparable"
+    assert every([], "none").verdict == "not comparable"
+    named = every({"case 1": j("reproduced"), "case 2": j("inconclusive")})
+    assert named.rule == "in every one of case 1, case 2: r" and named.ours == "case 1: reproduced; case 2: inconclusive"

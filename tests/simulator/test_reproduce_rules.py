@@ -146,4 +146,5 @@ def test_every_part_must_hold_and_one_failed_part_fails_the_claim():
     assert every([j("reproduced"), j("not comparable")], "both").verdict == "not comparable"
     assert every([], "none").verdict == "not comparable"
     named = every({"case 1": j("reproduced"), "case 2": j("inconclusive")})
-    assert named.rule == "in every one of case 1, case 2: r" and named.ours == "case 1: reproduced; case 2: inconclusive"
+    assert named.rule == "in every one of case 1, case 2: r"
+    assert named.ours == "case 1: reproduced; case 2: inconclusive"

@@ -6,11 +6,16 @@ The journal and the run directories are untrusted on resume: a line that cannot 
 a run index outside the campaign) is dropped with a warning and its run runs again, and every journaled run whose
 stored files are damaged (:mod:`simulator.campaign.verify`) runs again too; its new line, appended later, supersedes
 the old one.
+
+One process at a time: the journal holds an exclusive lock on ``campaign.lock`` while open (released by the kernel when
+the process dies, so it never goes stale). Two processes running the same campaign directory would both run a pending
+run into the same run directory, each moving the other's aside, and journal it twice; the second is refused instead.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import logging
 import os
@@ -29,6 +34,12 @@ REJECTED_FILE = "campaign.rejected.jsonl"
 
 PARAMS_FILE = "campaign.json"
 JOURNAL_FILE = "campaign.jsonl"
+LOCK_FILE = "campaign.lock"
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: no lock (one process per directory is then the user's care)
+    fcntl = None  # type: ignore[assignment]
 
 
 class CampaignJournal:
@@ -53,10 +64,16 @@ class CampaignJournal:
         self.out_dir = Path(out_dir)
         self.params = params
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        self._check_params()
-        self.path = self.out_dir / JOURNAL_FILE
-        self.reports: dict[int, RunReport] = self._read()
-        self._file = open(self.path, "a", encoding="utf-8")
+        self._lock = self._acquire_lock()
+        try:
+            self._check_params()
+            self.path = self.out_dir / JOURNAL_FILE
+            self.reports: dict[int, RunReport] = self._read()
+            self._file = open(self.path, "a", encoding="utf-8")
+        except BaseException:
+            if self._lock is not None:
+                self._lock.close()
+            raise
 
     def _check_params(self) -> None:
         stored_path = self.out_dir / PARAMS_FILE
@@ -154,8 +171,32 @@ class CampaignJournal:
         """All recorded runs by index."""
         return [self.reports[i] for i in sorted(self.reports)]
 
+    def _acquire_lock(self):  # noqa: ANN202 - an open file or None
+        """Lock ``campaign.lock`` for this process, or raise :class:`CampaignError` naming the process holding it."""
+        if fcntl is None:
+            return None
+        lock = open(self.out_dir / LOCK_FILE, "a+", encoding="utf-8")
+        try:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            lock.seek(0)
+            holder = lock.read().strip() or "unknown"
+            lock.close()
+            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise
+            raise CampaignError(f"{self.out_dir} is in use by another campaign process (pid {holder}); wait for it to "
+                                "finish or use another --out") from None
+        lock.seek(0)
+        lock.truncate()
+        lock.write(f"{os.getpid()}\n")
+        lock.flush()
+        return lock
+
     def close(self) -> None:
         self._file.close()
+        if self._lock is not None:
+            self._lock.close()  # closing the file releases the lock
+            self._lock = None
 
     def __enter__(self) -> CampaignJournal:
         return self

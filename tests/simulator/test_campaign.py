@@ -94,6 +94,26 @@ def test_resume_with_other_parameters_is_refused(tmp_path, capsys):
     assert "skytrack campaign:" in capsys.readouterr().err
 
 
+def test_a_campaign_directory_in_use_by_another_process_is_refused_untouched(tmp_path, capsys):
+    # two processes on one directory ran the same pending runs into the same run directories, each moving the other's
+    # aside, and journaled them twice (one as an error): the second is now refused while the first holds the lock
+    from simulator.campaign.config import CampaignParams
+    from simulator.campaign.journal import CampaignJournal
+    from worlds.loader import load_world
+
+    config = CampaignConfig(world="demo", runs=1, out_dir=tmp_path, duration_s=1.0)
+    holder = CampaignJournal(tmp_path, CampaignParams.resolve(config, load_world("demo")))
+    try:
+        assert main(["campaign", "demo", "--runs", "1", "--duration", "1", "--quiet", "--out", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert f"is in use by another campaign process (pid {os.getpid()})" in err
+        assert _journal(tmp_path) == [] and not (tmp_path / "runs").exists()
+    finally:
+        holder.close()
+    assert main(["campaign", "demo", "--runs", "1", "--duration", "1", "--quiet", "--out", str(tmp_path)]) == 0
+    assert [r["status"] for r in _journal(tmp_path)] == ["completed"]
+
+
 def test_crashing_runs_are_recorded_and_the_campaign_goes_on(tmp_path, monkeypatch, capsys):
     monkeypatch.syspath_prepend(str(ROOT))
     plugin = "tests.simulator.user_modules.raising:FailingEstimator"

@@ -147,28 +147,28 @@ def _guidance(res: Results) -> list[Finding]:
     return out
 
 
+def _road_cut(a: np.ndarray, b: np.ndarray, base: str, names: tuple[str, str], what: str) -> Finding:
+    """One of our road filters (``a``) against the EKF (``b``), judged at Table II's reduction for ``base``."""
+    f = paper_reduction(base)
+    j = rules.paired_reduction_at_least(a, b, f, names=names)
+    return Finding.judged(f"Road constraints cut the fused position error by {100 * f:.1f} % ({what})", j,
+                          paper=f"{100 * f:.1f} % lower", paper_faithful=False)
+
+
 def _extras(res: Results) -> list[Finding]:
     out = []
     col = "ECUKF fused, road (ours)"
-    f = paper_reduction("ECUKF fused, road")
     if col in res.pos:
-        j = rules.paired_reduction_at_least(res.pos[col], res.pos["EKF fused"], f, names=("ECUKF (ours)", "EKF"))
-        out.append(Finding.judged(f"Road constraints cut the fused position error by {100 * f:.1f} % (our ECUKF: "
-                                  "velocity turned with the road, projected sigma points, junction hypotheses, no ε "
-                                  "gate; Table I's NMPC)", j, paper=f"{100 * f:.1f} % lower", paper_faithful=False))
+        out.append(_road_cut(res.pos[col], res.pos["EKF fused"], "ECUKF fused, road", ("ECUKF (ours)", "EKF"),
+                             "our ECUKF: velocity turned with the road, projected sigma points, junction hypotheses, "
+                             "no ε gate; Table I's NMPC"))
     for kind, base in (("maekf", "MAEKF fused, road"), ("ecukf", "ECUKF fused, road")):
         if res.curve and kind in res.curve:
-            f = paper_reduction(base)
-            j = rules.paired_reduction_at_least(res.curve[kind], res.curve["ekf"], f, names=(kind, "ekf"))
-            out.append(Finding.judged(f"Road constraints cut the fused position error by {100 * f:.1f} % (our "
-                                      f"{kind.upper()}; estimation only, seeded curved roads)", j,
-                                      paper=f"{100 * f:.1f} % lower", paper_faithful=False))
+            out.append(_road_cut(res.curve[kind], res.curve["ekf"], base, (kind, "ekf"),
+                                 f"our {kind.upper()}; estimation only, seeded curved roads"))
         if res.town and base in res.town:
-            f = paper_reduction(base)
-            j = rules.paired_reduction_at_least(res.town[base], res.town["EKF fused"], f, names=(kind, "ekf"))
-            out.append(Finding.judged(f"Road constraints cut the fused position error by {100 * f:.1f} % (our "
-                                      f"{kind.upper()} and NMPC in the town world, 150 m standoff)", j,
-                                      paper=f"{100 * f:.1f} % lower", paper_faithful=False))
+            out.append(_road_cut(res.town[base], res.town["EKF fused"], base, (kind, "ekf"),
+                                 f"our {kind.upper()} and NMPC in the town world, 150 m standoff"))
     g = res.guidance
     if "NMPC (ours) + EKF" in g:
         j = rules.paired_less(g["NMPC (ours) + EKF"]["standoff_ss"], g["NMPC + EKF"]["standoff_ss"], " m",

@@ -27,7 +27,7 @@ from simulator.campaign.config import CampaignError, CampaignParams, RunReport, 
 from simulator.campaign.verify import damage, manifest
 from simulator.record import atomic_write_text, json_default
 
-__all__ = ["CampaignJournal"]
+__all__ = ["CampaignJournal", "exclusive_lock"]
 
 _LOG = logging.getLogger(__name__)
 REJECTED_FILE = "campaign.rejected.jsonl"
@@ -40,6 +40,29 @@ try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX: no lock (one process per directory is then the user's care)
     fcntl = None  # type: ignore[assignment]
+
+
+def exclusive_lock(path: Path, error: type[Exception], in_use: str):  # noqa: ANN201 - an open file or None
+    """Hold an exclusive lock on the file ``path`` for this process (released when the returned file is closed or the
+    process dies, so it never goes stale), or raise ``error(in_use + " (pid …); …")`` naming the holder. ``None``
+    where the platform has no ``flock``."""
+    if fcntl is None:
+        return None
+    lock = open(path, "a+", encoding="utf-8")
+    try:
+        fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        lock.seek(0)
+        holder = lock.read().strip() or "unknown"
+        lock.close()
+        if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+            raise
+        raise error(f"{in_use} (pid {holder}); wait for it to finish or use another --out") from None
+    lock.seek(0)
+    lock.truncate()
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
+    return lock
 
 
 class CampaignJournal:
@@ -173,24 +196,8 @@ class CampaignJournal:
 
     def _acquire_lock(self):  # noqa: ANN202 - an open file or None
         """Lock ``campaign.lock`` for this process, or raise :class:`CampaignError` naming the process holding it."""
-        if fcntl is None:
-            return None
-        lock = open(self.out_dir / LOCK_FILE, "a+", encoding="utf-8")
-        try:
-            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
-            lock.seek(0)
-            holder = lock.read().strip() or "unknown"
-            lock.close()
-            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                raise
-            raise CampaignError(f"{self.out_dir} is in use by another campaign process (pid {holder}); wait for it to "
-                                "finish or use another --out") from None
-        lock.seek(0)
-        lock.truncate()
-        lock.write(f"{os.getpid()}\n")
-        lock.flush()
-        return lock
+        return exclusive_lock(self.out_dir / LOCK_FILE, CampaignError,
+                              f"{self.out_dir} is in use by another campaign process")
 
     def close(self) -> None:
         self._file.close()

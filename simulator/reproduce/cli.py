@@ -70,7 +70,8 @@ def reproduce_papers(codes: list[str], out: Path, runs: int | None, workers: int
             continue
         from dataclasses import replace
 
-        rep = replace(rep, wall_time_s=time.perf_counter() - t0, quick=quick, seeds=rep.seeds or ctx.seeds_text())
+        rep = replace(rep, wall_time_s=time.perf_counter() - t0, quick=quick, seeds=rep.seeds or ctx.seeds_text(),
+                      reused=dict(ctx.reused))
         write_paper_report(rep, paper_dir, command)
         atomic_write_text(paper_dir / "verdicts.json",
                           json.dumps(verdicts_record(rep, command), indent=1, ensure_ascii=False) + "\n")

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from simulator.kinematic.consensus import ConsensusLoopConfig, ConsensusLoopResult
-from simulator.reproduce.paper_000_loop import (CONSENSUS_LIMIT_M, NEAR_NADIR_M, OURS_MARGIN_M, PRIMARY_L, jobs_for,
-                                                run_job)
+from simulator.reproduce.paper_000_loop import (CONSENSUS_LIMIT_M, NEAR_NADIR_M, OURS_MARGIN_M, PRIMARY_L, RunSummary,
+                                                jobs_for, run_job)
 from simulator.reproduce.paper_000_physics import WORLD, physics_runs, physics_table
 from simulator.reproduce.paper_000_verdicts import (PAPER_STEP_MS, PROJECT_STEP_MS, SEPARATION_VARIANTS,
                                                     TRACKING_MARGIN_M, Results, collect, findings)
@@ -157,7 +157,8 @@ def reproduce(ctx: ReproContext) -> PaperReport:
     steps = QUICK_STEPS if ctx.quick else ConsensusLoopConfig().steps
     settle = min(SETTLE_STEPS, QUICK_STEPS // 2) if ctx.quick else SETTLE_STEPS
     cfg = ConsensusLoopConfig()
-    out = ctx.map(run_job, jobs_for(ctx.run_seeds(), steps, settle))
+    out = ctx.map(run_job, jobs_for(ctx.run_seeds(), steps, settle), store="loops",
+                  types=(RunSummary, ConsensusLoopResult))
     kept = {s.case: r for s, r in out if r is not None}
     phys_tab, phys = physics_table(physics_runs(ctx))
     res = collect([s for s, _ in out], settle_s=settle * cfg.dt, mission_s=steps * cfg.dt, physics=phys)

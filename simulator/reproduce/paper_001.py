@@ -147,7 +147,7 @@ def reproduce(ctx: ReproContext) -> PaperReport:
     # run r of every variant is listed in seed order within its configuration (ctx.map keeps the job order)
     jobs = _jobs(ctx)
     order = {s: i for i, s in enumerate(ctx.run_seeds())}
-    done = sorted(ctx.map(_one, jobs, chunksize=1), key=lambda jo: order[jo[0].seed])
+    done = sorted(ctx.map(_one, jobs, store="loops", types=(_Job, LoopResult)), key=lambda jo: order[jo[0].seed])
     res, flights = _results(done)
     phys_tables, phys_findings, phys_setup = physics_cross_check(ctx)
     steps = 10 if ctx.quick else 100

@@ -88,7 +88,7 @@ def _replays(ctx: ReproContext) -> tuple[dict[str, np.ndarray], dict[str, np.nda
     fixture_seeds = seeds[:FIXTURE_RUNS]  # a reference row, judged nowhere: fewer runs
     jobs = [ReplayJob("curve", seed=s, duration=duration, filters=PAPER_FILTERS) for s in seeds]
     jobs += [ReplayJob("single_road", seed=s, duration=duration, filters=PAPER_FILTERS) for s in fixture_seeds]
-    res = ctx.map(run_job, jobs)
+    res = ctx.map(run_job, jobs, store="replays")
     n = len(seeds)
     curve = {k: np.array([r[k] for r in res[:n]]) for k in PAPER_FILTERS}
     fixture = {k: np.array([r[k] for r in res[n:]]) for k in PAPER_FILTERS}

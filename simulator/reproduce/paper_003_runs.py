@@ -94,7 +94,8 @@ def run_kinematic(ctx: ReproContext) -> tuple[Results, dict[tuple[int, str], For
     out: dict[tuple[int, str], list[dict[str, float]]] = {}
     first: dict[tuple[int, str], FormationLoopResult] = {}
     series: dict[tuple[int, str], list[np.ndarray]] = {}
-    for (case, var, _, _), (res, row) in zip(jobs, ctx.map(_one, jobs, chunksize=4), strict=True):
+    done = ctx.map(_one, jobs, chunksize=4, store="loops", types=(FormationLoopResult,))
+    for (case, var, _, _), (res, row) in zip(jobs, done, strict=True):
         out.setdefault((case, var), []).append(row)
         first.setdefault((case, var), res)
         series.setdefault((case, var), []).append(res.error)

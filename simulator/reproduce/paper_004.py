@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from simulator.reproduce.paper_004_decoys import DecoyEpisodes
 from simulator.reproduce.paper_004_findings import EMPTY, LAST, MID, PAPER_MISSION_S, Results, findings
 from simulator.reproduce.paper_004_physics import RUNS as PHYS_RUNS
 from simulator.reproduce.paper_004_physics import WORLD, physics_cross_check
@@ -35,7 +36,7 @@ def _run_all(ctx: ReproContext) -> dict[str, list[RunSummary]]:
     jobs = [(v.name, s, ctx.quick) for v in VARIANTS for s in (seeds if v is PRIMARY else seeds[:n_sens])]
     # longest configurations first, so the pool's last jobs are short
     order = sorted(range(len(jobs)), key=lambda i: jobs[i][0] not in ("turn180", "fine"))
-    done = ctx.map(run_one, [jobs[i] for i in order])
+    done = ctx.map(run_one, [jobs[i] for i in order], store="missions", types=(RunSummary, DecoyEpisodes))
     res: list[RunSummary | None] = [None] * len(jobs)
     for i, r in zip(order, done, strict=True):
         res[i] = r

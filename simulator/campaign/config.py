@@ -236,12 +236,20 @@ class CampaignParams:
         return asdict(self)
 
     def differences(self, stored: dict[str, Any]) -> list[str]:
-        """What differs from a stored ``campaign.json`` (``world`` as typed may differ if it names the same file)."""
+        """What differs from a stored ``campaign.json`` (``world`` as typed may differ if it names the same file).
+
+        More runs than stored is no difference: a campaign is extended (run ``r``'s seed depends on ``r`` and the base
+        seed alone, so the stored runs are the first runs of the longer campaign). Fewer is, as the stored runs beyond
+        them would be dropped."""
         mine = self.to_json()
         out = []
         for key in ("world_path", "world_sha256", "overrides", "seed", "duration_s", "runs"):
             if key not in stored:
                 out.append(f"{key}: missing from campaign.json, this call gives {mine[key]!r}")
+            elif key == "runs" and isinstance(stored[key], int) and not isinstance(stored[key], bool) \
+                    and mine[key] > stored[key]:
+                continue
             elif stored[key] != mine[key]:
-                out.append(f"{key}: campaign.json has {stored[key]!r}, this call gives {mine[key]!r}")
+                extra = " (a campaign can be extended with more runs, not cut)" if key == "runs" else ""
+                out.append(f"{key}: campaign.json has {stored[key]!r}, this call gives {mine[key]!r}{extra}")
         return out

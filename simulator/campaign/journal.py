@@ -109,6 +109,10 @@ class CampaignJournal:
             if diffs:
                 raise CampaignError(f"{self.out_dir} holds a campaign with different parameters; use another --out or "
                                     "the same parameters to resume:\n  " + "\n  ".join(diffs))
+            if stored.get("runs") != self.params.runs:  # extended: the stored runs are its first runs
+                _LOG.info("%s: extending the campaign from %s to %d runs", self.out_dir, stored.get("runs"),
+                          self.params.runs)
+                atomic_write_text(stored_path, json.dumps(self.params.to_json(), indent=2) + "\n")
         else:
             if (self.out_dir / JOURNAL_FILE).exists():
                 raise CampaignError(f"{self.out_dir} has {JOURNAL_FILE} but no {PARAMS_FILE}: not resuming blindly")

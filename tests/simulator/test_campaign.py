@@ -94,6 +94,23 @@ def test_resume_with_other_parameters_is_refused(tmp_path, capsys):
     assert "skytrack campaign:" in capsys.readouterr().err
 
 
+def test_a_campaign_extends_to_more_runs_keeping_its_first_and_is_never_cut(tmp_path, capsys):
+    args = ["campaign", "demo", "--duration", "1", "--seed", "5", "--quiet", "--out", str(tmp_path)]
+    assert main([*args, "--runs", "1"]) == 0
+    first = _journal(tmp_path)[0]
+    assert main([*args, "--runs", "3"]) == 0
+    lines = _journal(tmp_path)
+    assert sorted(r["index"] for r in lines) == [0, 1, 2]  # run 0 kept (not redone), runs 1–2 added
+    assert lines[0] == first
+    assert {r["index"]: r["seed"] for r in lines} == {i: run_seed(5, i) for i in range(3)}
+    assert json.loads((tmp_path / "campaign.json").read_text())["runs"] == 3
+    assert json.loads((tmp_path / "summary.json").read_text())["metrics"]["real_time_factor"]["n"] == 3
+    capsys.readouterr()
+    assert main([*args, "--runs", "2"]) == 2  # cutting would drop stored runs: refused
+    assert "can be extended with more runs, not cut" in capsys.readouterr().err
+    assert len(_journal(tmp_path)) == 3
+
+
 def test_a_campaign_directory_in_use_by_another_process_is_refused_untouched(tmp_path, capsys):
     # two processes on one directory ran the same pending runs into the same run directories, each moving the other's
     # aside, and journaled them twice (one as an error): the second is now refused while the first holds the lock

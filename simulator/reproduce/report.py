@@ -219,9 +219,10 @@ class ReproContext:
         stores."""
         if store is None or self.quick:
             return self._run(fn, jobs, chunksize)
-        from simulator.reproduce.stored import JobStore
+        from simulator.reproduce.stored import JobStore, code_fingerprint
 
-        with JobStore(self.out_dir / "campaigns" / store, types) as st:
+        code = code_fingerprint(fn.__module__)
+        with JobStore(self.out_dir / "campaigns" / store, types, code) as st:
             todo = [j for j in jobs if j not in st]
             self.reused[store] = (len(jobs) - len(todo), len(jobs))
             if len(todo) < len(jobs):

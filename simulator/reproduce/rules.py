@@ -59,6 +59,15 @@ def _g(x: float, digits: int = 3) -> str:
     return f"{x:.{digits}g}"
 
 
+def _beside(x: float, line: float) -> str:
+    """``x`` with 3 significant digits, or as many more as it takes not to print it as ``line`` when it is not (a
+    smallest distance of 9.9996 m judged against 10 m reads "9.9996", not "10")."""
+    for digits in range(3, 13):
+        if x == line or _g(x, digits) != _g(line, digits):
+            return _g(x, digits)
+    return repr(x)
+
+
 def _worst(values: ArrayLike, limit: float, unit: str, below: bool) -> Judgement:
     """Every value past ``limit`` (below it, or at least it), judged on the worst value."""
     rule = f"largest value < {_g(limit)}{unit}" if below else f"smallest value ≥ {_g(limit)}{unit}"
@@ -68,7 +77,7 @@ def _worst(values: ArrayLike, limit: float, unit: str, below: bool) -> Judgement
     worst = float(x.max() if below else x.min())
     ok = worst < limit if below else worst >= limit
     return Judgement(verdict="reproduced" if ok else "not reproduced", rule=rule,
-                     ours=f"{'largest' if below else 'smallest'} {_g(worst)}{unit} over {x.size} values",
+                     ours=f"{'largest' if below else 'smallest'} {_beside(worst, limit)}{unit} over {x.size} values",
                      runs=int(x.size))
 
 

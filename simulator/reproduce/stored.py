@@ -5,10 +5,11 @@ loops run through :meth:`simulator.reproduce.report.ReproContext.map`, and with 
 result is appended to ``<store>/results.jsonl`` as it comes back (one flushed line per job), so a reproduction killed
 at any moment keeps every finished job, and a later one with more runs only runs the new jobs.
 
-A stored result is reused only when it was computed by the same code: each line carries :func:`code_fingerprint`, a
-hash of every source file of ``autonomy/``, ``simulator/`` and ``worlds/`` and of the numerical libraries' versions.
-Any change there, however small, means every stored result runs again (conservative: a report is never a mix of two
-versions of the code).
+A stored result is reused only when it was computed by the same code: each line carries :func:`code_fingerprint` of the
+job function's module, a hash of its source and of every project module it imports (transitively, function-level
+imports included), of the world files and of the numerical libraries' versions. Any change there, however small, means
+every stored result runs again (a report is never a mix of two versions of the computing code); a change to how the
+report judges or prints the results (rules, tables, findings) keeps them.
 
 The file is untrusted input: results are plain JSON, decoded only into the dataclasses the caller names (never
 pickle), and a line that cannot be read or decoded — a torn last line, garbage, a field that does not match its
@@ -18,6 +19,7 @@ class — is dropped with a warning into ``results.rejected.jsonl`` and its job 
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import hashlib
 import importlib.metadata
@@ -41,7 +43,7 @@ RESULTS_FILE = "results.jsonl"
 REJECTED_FILE = "results.rejected.jsonl"
 LOCK_FILE = "store.lock"
 _ROOT = Path(__file__).resolve().parents[2]
-_CODE_DIRS = ("autonomy", "simulator", "worlds")
+_PACKAGES = ("autonomy", "interfaces", "simulator", "vehicles", "worlds")
 _LIBRARIES = ("numpy", "scipy", "shapely", "casadi", "pybullet")
 _KINDS = "fiub"  # ndarray dtypes a result may hold: float, int, unsigned, bool
 _TAGS = {frozenset(k) for k in (("__float__",), ("__tuple__",), ("__dict__",), ("__ndarray__", "shape", "data"),
@@ -52,21 +54,63 @@ class StoreError(RuntimeError):
     """A job store that cannot be used (held by another process)."""
 
 
-@lru_cache(maxsize=1)
-def code_fingerprint() -> str:
-    """SHA-256 (16 hex digits) of every ``.py``/``.yaml`` file under ``autonomy/``, ``simulator/`` and ``worlds/``
-    (path and content) and of the installed versions of the numerical libraries."""
+@lru_cache(maxsize=None)
+def code_fingerprint(module: str) -> str:
+    """SHA-256 (16 hex digits) of the source of ``module`` and of every project module it imports, directly or not
+    (anywhere in a file, function-level imports included, with the packages' ``__init__`` files), of every world
+    file, and of the installed versions of the numerical libraries: whatever a job of ``module`` can compute with."""
     h = hashlib.sha256()
-    for d in _CODE_DIRS:
-        for p in sorted((_ROOT / d).rglob("*")):
-            if p.suffix in (".py", ".yaml") and p.is_file() and "__pycache__" not in p.parts:
-                h.update(str(p.relative_to(_ROOT)).encode() + b"\0" + p.read_bytes() + b"\0")
+    for p in sorted(_closure(module)):
+        h.update(str(p.relative_to(_ROOT)).encode() + b"\0" + p.read_bytes() + b"\0")
+    for p in sorted((_ROOT / "worlds").rglob("*.yaml")):
+        h.update(str(p.relative_to(_ROOT)).encode() + b"\0" + p.read_bytes() + b"\0")
     for lib in _LIBRARIES:
         try:
             h.update(f"{lib}={importlib.metadata.version(lib)}\0".encode())
         except importlib.metadata.PackageNotFoundError:
             h.update(f"{lib}=-\0".encode())
     return h.hexdigest()[:16]
+
+
+def _source(name: str) -> Path | None:
+    """The file of project module (or package) ``name``, or None when it is not one of the project's."""
+    if name.split(".")[0] not in _PACKAGES:
+        return None
+    base = _ROOT.joinpath(*name.split("."))
+    for p in (base.with_suffix(".py"), base / "__init__.py"):
+        if p.is_file():
+            return p
+    return None
+
+
+def _closure(module: str) -> set[Path]:
+    """Source files of ``module`` and of the project modules it imports, transitively."""
+    seen: set[str] = set()
+    files: set[Path] = set()
+    todo = [module]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        path = _source(name)
+        if path is None:
+            continue
+        files.add(path)
+        parts = name.split(".")
+        todo += [".".join(parts[:i]) for i in range(1, len(parts))]  # importing a.b.c runs a and a.b
+        package = name if path.name == "__init__.py" else ".".join(parts[:-1])
+        for node in ast.walk(ast.parse(path.read_bytes(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                todo += [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    up = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                    base = ".".join([*up, base] if base else up)
+                todo.append(base)
+                todo += [f"{base}.{a.name}" for a in node.names]  # ``from pkg import module``
+    return files
 
 
 def _type_name(cls: type) -> str:
@@ -177,18 +221,21 @@ class JobStore:
         The store's folder (created).
     types : Iterable[type]
         The dataclasses a stored result may contain.
+    code : str
+        The fingerprint of the code computing the results (:func:`code_fingerprint` of the job function's module):
+        stored results of another fingerprint are not used.
 
     Use as a context manager (the lock is held while open); :meth:`get` a finished job's result, :meth:`put` a new
     one. A job's key is its :func:`encode`-d JSON text, so jobs must be made of the values :func:`encode` takes.
     """
 
-    def __init__(self, directory: Path, types: Iterable[type] = ()) -> None:
+    def __init__(self, directory: Path, types: Iterable[type] = (), code: str = "") -> None:
         self.dir = Path(directory)
         self.types = tuple(types)
         self.dir.mkdir(parents=True, exist_ok=True)
         self._lock = exclusive_lock(self.dir / LOCK_FILE, StoreError, f"{self.dir} is in use by another reproduction")
         self.path = self.dir / RESULTS_FILE
-        self.code = code_fingerprint()
+        self.code = code
         self.stale = 0
         self._results = self._read()
         self._file = open(self.path, "a", encoding="utf-8")

@@ -31,6 +31,13 @@ def test_all_at_least_judges_the_smallest_value():
     assert all_at_least([10.2, 9.99, 30.0], 10.0).verdict == "not reproduced"
 
 
+def test_a_worst_value_next_to_the_line_prints_the_digits_that_decide_it():
+    short = all_at_least([12.0, 9.99957], 10.0, " m")
+    assert short.verdict == "not reproduced" and "smallest 9.9996 m" in short.ours
+    assert "smallest 10 m" in all_at_least([10.0, 12.0], 10.0, " m").ours
+    assert "largest 0.178 m" in all_below([0.1781234], 0.05, " m").ours
+
+
 @pytest.mark.parametrize("mean,verdict", [(0.8, "reproduced"), (1.2, "not reproduced"), (1.0, "inconclusive")])
 def test_mean_below_uses_both_ends_of_the_interval(mean, verdict):
     x = mean + _noise(50, 0.2)

@@ -119,7 +119,9 @@ def test_an_interrupted_map_resumes_with_only_the_unfinished_jobs(tmp_path) -> N
 def test_a_pool_stores_every_result_as_it_finishes(tmp_path) -> None:
     ctx = ReproContext(out_dir=tmp_path, runs=1, workers=2)
     assert ctx.map(_square, [5, 6, 7], store="squares") == [(5, 25.0), (6, 36.0), (7, 49.0)]
-    with JobStore(tmp_path / "campaigns" / "squares") as st:
+    from simulator.reproduce.stored import code_fingerprint
+
+    with JobStore(tmp_path / "campaigns" / "squares", code=code_fingerprint(_square.__module__)) as st:
         assert len(st) == 3 and st.get(6) == (6, 36.0)
 
 
@@ -177,3 +179,15 @@ def test_each_papers_results_come_back_from_the_store_equal(paper: str, tmp_path
     with JobStore(tmp_path, types) as st:
         assert job in st
         assert _same(st.get(job), result)
+
+
+def test_the_code_fingerprint_covers_what_a_job_imports_and_not_how_reports_are_judged() -> None:
+    from simulator.reproduce.stored import _ROOT, _closure, code_fingerprint
+
+    files = {str(p.relative_to(_ROOT)) for p in _closure("simulator.reproduce.paper_004_runs")}
+    # imported through the mission, the planner and a function-level import of the run's on_step hook
+    assert {"simulator/kinematic/search_mission.py", "autonomy/guidance/search/planner.py",
+            "autonomy/estimation/setmem/polygons.py", "autonomy/__init__.py"} <= files
+    assert "simulator/reproduce/rules.py" not in files and "simulator/reproduce/paper_004_findings.py" not in files
+    a, b = (code_fingerprint(f"simulator.reproduce.{m}") for m in ("paper_004_runs", "paper_000_loop"))
+    assert a != b

@@ -20,17 +20,19 @@ import json
 import logging
 import os
 import shutil
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from simulator.campaign.config import CampaignError, CampaignParams, RunReport, run_dir_name
 from simulator.campaign.verify import damage, manifest
 from simulator.record import atomic_write_text, json_default
 
-__all__ = ["CampaignJournal", "exclusive_lock"]
+__all__ = ["CampaignJournal", "QuietDrop", "exclusive_lock", "read_jsonl"]
 
 _LOG = logging.getLogger(__name__)
 REJECTED_FILE = "campaign.rejected.jsonl"
+T = TypeVar("T")
 
 PARAMS_FILE = "campaign.json"
 JOURNAL_FILE = "campaign.jsonl"
@@ -63,6 +65,49 @@ def exclusive_lock(path: Path, error: type[Exception], in_use: str):  # noqa: AN
     lock.write(f"{os.getpid()}\n")
     lock.flush()
     return lock
+
+
+class QuietDrop(ValueError):
+    """Raised by a :func:`read_jsonl` parser to drop a line without a warning of its own (the caller sums them up)."""
+
+
+def read_jsonl(path: Path, parse: Callable[[Any], T], rejected: Path, what: str, redo: str) -> list[T]:
+    """``parse`` of each line of the append-only journal ``path``, in order (``[]`` when there is none).
+
+    The journal is untrusted: a line that is not UTF-8 JSON, or that ``parse`` refuses (``KeyError``, ``TypeError``,
+    ``ValueError``), and a last line cut off by a killed writer are dropped with a warning ("unreadable <what> …:
+    dropped, its <redo> runs again"), appended to ``rejected`` (kept for inspection, never read) and the journal is
+    rewritten atomically without them."""
+    if not path.exists():
+        return []
+    lines = path.read_bytes().split(b"\n")
+    torn = lines.pop()  # after the last newline: empty, or a line a killed writer did not finish
+    out: list[T] = []
+    kept: list[bytes] = []
+    dropped: list[tuple[int, bytes, str | None]] = []
+    for n, raw in enumerate(lines, start=1):
+        if not raw.strip():
+            continue
+        try:
+            value = parse(json.loads(raw.decode("utf-8")))
+        except QuietDrop:
+            dropped.append((n, raw, None))
+            continue
+        except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+            dropped.append((n, raw, f"unreadable {what} ({type(exc).__name__}: {exc})"))
+            continue
+        kept.append(raw)
+        out.append(value)
+    if torn:
+        dropped.append((len(lines) + 1, torn, f"its last line was cut off ({len(torn)} bytes, no newline)"))
+    for n, _raw, why in dropped:
+        if why is not None:
+            _LOG.warning("%s:%d: %s: dropped, its %s runs again", path, n, why, redo)
+    if dropped:
+        with open(rejected, "ab") as f:
+            f.writelines(raw + b"\n" for _, raw, _ in dropped)
+        atomic_write_text(path, "".join(line.decode("utf-8") + "\n" for line in kept))
+    return out
 
 
 class CampaignJournal:
@@ -119,35 +164,15 @@ class CampaignJournal:
             atomic_write_text(stored_path, json.dumps(self.params.to_json(), indent=2) + "\n")
 
     def _read(self) -> dict[int, RunReport]:
-        if not self.path.exists():
-            return {}
-        data = self.path.read_bytes()
-        lines = data.split(b"\n")
-        torn = lines.pop()  # after the last newline: empty, or a line a killed writer did not finish
-        reports: dict[int, RunReport] = {}
-        kept: list[bytes] = []
-        rejected: list[tuple[int, bytes, str]] = []
-        for n, raw in enumerate(lines, start=1):
-            if not raw.strip():
-                continue
-            try:
-                rep = RunReport.from_json(json.loads(raw.decode("utf-8")))
-                if not 0 <= rep.index < self.params.runs:
-                    raise ValueError(f"run index {rep.index} outside 0..{self.params.runs - 1}")
-            except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-                rejected.append((n, raw, f"unreadable run record ({type(exc).__name__}: {exc})"))
-                continue
-            kept.append(raw)
-            reports[rep.index] = rep  # a later line is a redo of a damaged run: it wins
-        if torn:
-            rejected.append((len(lines) + 1, torn, f"its last line was cut off ({len(torn)} bytes, no newline)"))
-        for n, _raw, why in rejected:
-            _LOG.warning("%s:%d: %s: dropped, its run runs again", self.path, n, why)
-        if rejected:
-            with open(self.out_dir / REJECTED_FILE, "ab") as f:  # kept for inspection, never read
-                f.writelines(raw + b"\n" for _, raw, _ in rejected)
-            atomic_write_text(self.path, "".join(line.decode("utf-8") + "\n" for line in kept))
-        return reports
+        def parse(obj: Any) -> RunReport:
+            rep = RunReport.from_json(obj)
+            if not 0 <= rep.index < self.params.runs:
+                raise ValueError(f"run index {rep.index} outside 0..{self.params.runs - 1}")
+            return rep
+
+        # a later line is a redo of a damaged run: it wins
+        return {rep.index: rep for rep in read_jsonl(self.path, parse, self.out_dir / REJECTED_FILE, "run record",
+                                                     "run")}
 
     def drop_damaged(self) -> dict[int, str]:
         """Forget every journaled run whose stored files are damaged (they run again); returns what is wrong with

@@ -33,8 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from simulator.campaign.journal import exclusive_lock
-from simulator.record import atomic_write_text
+from simulator.campaign.journal import QuietDrop, exclusive_lock, read_jsonl
 
 __all__ = ["JobStore", "StoreError", "code_fingerprint", "decode", "encode"]
 
@@ -262,42 +261,18 @@ class JobStore:
         self._results[k] = result
 
     def _read(self) -> dict[str, Any]:
-        if not self.path.exists():
-            return {}
-        lines = self.path.read_bytes().split(b"\n")
-        torn = lines.pop()
-        out: dict[str, Any] = {}
-        kept: list[bytes] = []
-        dropped: list[tuple[int, bytes, str]] = []
-        for n, raw in enumerate(lines, start=1):
-            if not raw.strip():
-                continue
-            try:
-                rec = json.loads(raw.decode("utf-8"))
-                if not isinstance(rec, dict) or set(rec) != {"code", "job", "result"}:
-                    raise ValueError("not a {code, job, result} record")
-                if rec["code"] != self.code:
-                    self.stale += 1
-                    dropped.append((n, raw, f"computed by other code ({rec['code']!r}, now {self.code!r})"))
-                    continue
-                k = json.dumps(rec["job"], sort_keys=True, allow_nan=False)
-                out[k] = decode(rec["result"], self.types)
-            except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-                dropped.append((n, raw, f"unreadable result ({type(exc).__name__}: {exc})"))
-                continue
-            kept.append(raw)
-        if torn:
-            dropped.append((len(lines) + 1, torn, f"its last line was cut off ({len(torn)} bytes, no newline)"))
+        def parse(rec: Any) -> tuple[str, Any]:
+            if not isinstance(rec, dict) or set(rec) != {"code", "job", "result"}:
+                raise ValueError("not a {code, job, result} record")
+            if rec["code"] != self.code:
+                self.stale += 1
+                raise QuietDrop
+            return json.dumps(rec["job"], sort_keys=True, allow_nan=False), decode(rec["result"], self.types)
+
+        out = dict(read_jsonl(self.path, parse, self.dir / REJECTED_FILE, "result", "job"))
         if self.stale:
             _LOG.warning("%s: %d stored results were computed by other code: their jobs run again", self.path,
                          self.stale)
-        for n, _raw, why in dropped:
-            if not why.startswith("computed by other code"):
-                _LOG.warning("%s:%d: %s: dropped, its job runs again", self.path, n, why)
-        if dropped:
-            with open(self.dir / REJECTED_FILE, "ab") as f:  # kept for inspection, never read
-                f.writelines(raw + b"\n" for _, raw, _ in dropped)
-            atomic_write_text(self.path, "".join(line.decode("utf-8") + "\n" for line in kept))
         return out
 
     def close(self) -> None:

@@ -157,3 +157,41 @@ def test_a_road_column_short_of_the_paper_says_where_its_error_lies():
                              "8.7 m: the constraint removes the across-road error; what is left lies along the road, "
                              "where it does not act")
     assert findings(_results(meet=True))[0].why == findings(_results(meet=True))[0].ours  # nothing to explain
+
+
+def test_the_papers_world_runs_the_asked_count_and_our_extensions_fewer(tmp_path, monkeypatch):
+    """At the paper's 100 runs, every column of the paper's world asks its campaign for 100 runs; the town world's
+    columns (ours) for at most ``TOWN_RUNS`` and the traffic section for at most ``TRAFFIC_RUNS``."""
+    from types import SimpleNamespace
+
+    import simulator.campaign.runner as runner
+    from simulator.reproduce import paper_002, paper_002_traffic
+    from simulator.reproduce.paper_002_configs import CONFIGS, PAPER_WORLD
+    from simulator.reproduce.report import ReproContext
+
+    asked: dict[str, int] = {}
+
+    def fake_campaign(cfg):  # every run of every campaign "completed", nothing simulated
+        asked[cfg.out_dir.name] = cfg.runs
+        reports = [SimpleNamespace(index=i, status="completed", metrics={}, run_dir=f"runs/run-{i:05d}",
+                                   wall_time_s=0.0) for i in range(cfg.runs)]
+        return SimpleNamespace(reports=reports)
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_traffic(ctx, paper_runs=None):
+        asked["traffic section"] = ctx.runs
+        raise Stop
+
+    monkeypatch.setattr(runner, "run_campaign", fake_campaign)
+    monkeypatch.setattr(paper_002, "_guidance", lambda *a: {})
+    monkeypatch.setattr(paper_002, "_replays", lambda ctx: ({}, {}, 0.0))
+    monkeypatch.setattr(paper_002.tables, "error_split", lambda dirs: (None, {}))
+    monkeypatch.setattr(paper_002_traffic, "traffic_section", stop_at_traffic)
+    with pytest.raises(Stop):
+        paper_002.reproduce(ReproContext(out_dir=tmp_path, runs=100, workers=1, progress=False))
+    for cfg in CONFIGS:
+        assert asked[cfg.name] == (100 if cfg.world == PAPER_WORLD else paper_002.TOWN_RUNS), cfg.name
+    assert asked["traffic section"] == paper_002.TRAFFIC_RUNS
+    assert paper_002.TRAFFIC_RUNS <= paper_002.TOWN_RUNS < 100  # the traffic section pairs with the town runs

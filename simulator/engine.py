@@ -28,6 +28,7 @@ from typing import Any
 import yaml
 
 from simulator.prepare import build_assembly, prepare
+from simulator.provenance import source_fingerprint
 from simulator.clock import MAX_DURATION_S, Clock
 from simulator.plots import write_geometry, write_plots
 from simulator.interrupts import DeferredInterrupts, caused_by_interrupt
@@ -159,7 +160,8 @@ def run_world(loaded: LoadedWorld, options: RunOptions) -> RunOutcome:
                             f"# resolved from {loaded.path}\n" + yaml.safe_dump(resolved, sort_keys=False))
         recorder.write_json("run.json", {"world": world.name, "source": str(loaded.path), "seed": seed,
                                          "duration_s": duration, "physics_hz": clock.physics_hz,
-                                         "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "versions": _versions()})
+                                         "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "versions": _versions(),
+                                         "code": source_fingerprint()})
         recorder.event("run_start", 0, 0.0, world=world.name, seed=seed, duration_s=duration)
         write_geometry(out, prepared.geometry.buildings, prepared.geometry.network)
         assembly = build_assembly(prepared, seeds, recorder)

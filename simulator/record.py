@@ -4,7 +4,7 @@ record.
 Layout of a run directory::
 
     world.yaml            the resolved world (after --set overrides), exactly as the run used it
-    run.json              seed, world name and source, versions, start time
+    run.json              seed, world name and source, versions, start time, the source's fingerprint (``code``)
     events.jsonl          one JSON object per line: run_start, collisions, saturations, solver failures, ..., run_end
     metrics.json          rewritten atomically at every flush (partial) and at the end (final; "complete": true)
     timeseries/<stream>/part-NNNNN.npy

@@ -71,7 +71,7 @@ def reproduce_papers(codes: list[str], out: Path, runs: int | None, workers: int
         from dataclasses import replace
 
         rep = replace(rep, wall_time_s=time.perf_counter() - t0, quick=quick, seeds=rep.seeds or ctx.seeds_text(),
-                      reused=dict(ctx.reused))
+                      reused=dict(ctx.reused), codes=dict(ctx.codes))
         write_paper_report(rep, paper_dir, command)
         atomic_write_text(paper_dir / "verdicts.json",
                           json.dumps(verdicts_record(rep, command), indent=1, ensure_ascii=False) + "\n")

@@ -23,7 +23,7 @@ def physics_runs(ctx: ReproContext) -> dict[int, list[dict]]:
     """Per case, each completed run of the campaign: its flat metrics plus ``same_level_sep_m``, the smallest
     horizontal distance between two UAVs flying at the same commanded altitude (the pairs the fast MPC keeps apart),
     from the run's recorded truth."""
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
     from simulator.runrecord import load_run
     from worlds.loader import load_world
 
@@ -32,7 +32,7 @@ def physics_runs(ctx: ReproContext) -> dict[int, list[dict]]:
     out = {}
     for case in (1, 2):
         cdir = ctx.out_dir / "campaigns" / f"case{case}"
-        res = run_campaign(CampaignConfig(world=WORLD, runs=ctx.runs, out_dir=cdir, seed=ctx.seed,
+        res = ctx.campaign(CampaignConfig(world=WORLD, runs=ctx.runs, out_dir=cdir, seed=ctx.seed,
                                           duration_s=QUICK_DURATION_S if ctx.quick else None,
                                           overrides=CASE2_OVERRIDES if case == 2 else (), workers=ctx.workers,
                                           progress=ctx.progress))

@@ -182,7 +182,7 @@ def _run_numbers(run_dir: Any, n_uavs: int, settle: float) -> dict[str, Any]:
 def _campaigns(ctx: ReproContext) -> tuple[dict[tuple[str, str], list[dict]], int, float, float]:
     """Each configuration's completed runs' numbers; the runs per configuration, the run duration and the time (s)
     from which runs are judged."""
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
     from worlds.loader import load_world
 
     runs = 1 if ctx.quick else min(ctx.runs, PHYSICS_RUNS)
@@ -191,7 +191,7 @@ def _campaigns(ctx: ReproContext) -> tuple[dict[tuple[str, str], list[dict]], in
     out: dict[tuple[str, str], list[dict]] = {}
     for scenario, variant, n in CONFIGS:
         cdir = ctx.out_dir / "campaigns" / f"scenario{scenario}_{variant}"
-        res = run_campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
+        res = ctx.campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
                                           duration_s=duration if ctx.quick else None,
                                           overrides=scenario_overrides(scenario) + _variant_overrides(variant, n),
                                           workers=ctx.workers, progress=ctx.progress))

@@ -51,9 +51,9 @@ TOWN = {"EKF fused": "town_ekf", "UKF fused": "town_ukf", "MAEKF fused, road": "
 def _campaign(ctx: ReproContext, cfg: Config) -> dict[int, RunReport]:
     """Run (or resume) the campaign of ``cfg``; its completed runs by run index (run ``r`` has seed
     ``ctx.run_seeds()[r]``)."""
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
 
-    res = run_campaign(CampaignConfig(world=cfg.world, runs=ctx.runs, out_dir=ctx.out_dir / "campaigns" / cfg.name,
+    res = ctx.campaign(CampaignConfig(world=cfg.world, runs=ctx.runs, out_dir=ctx.out_dir / "campaigns" / cfg.name,
                                       seed=ctx.seed, duration_s=QUICK_DURATION_S if ctx.quick else None,
                                       overrides=cfg.overrides(), workers=ctx.workers, progress=ctx.progress))
     return {r.index: r for r in res.reports if r.status == "completed"}

@@ -99,9 +99,9 @@ CAMPAIGNS = ("traffic", "alone", "same_look", "radar_ekf", "radar_ukf", "radar_m
 
 
 def _run(ctx: ReproContext, c: Campaign) -> dict[int, RunReport]:
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
 
-    res = run_campaign(CampaignConfig(world=c.world, runs=ctx.runs, out_dir=ctx.out_dir / "campaigns" / c.name,
+    res = ctx.campaign(CampaignConfig(world=c.world, runs=ctx.runs, out_dir=ctx.out_dir / "campaigns" / c.name,
                                       seed=ctx.seed, duration_s=QUICK_DURATION_S if ctx.quick else None,
                                       overrides=c.overrides, workers=ctx.workers, progress=ctx.progress))
     return {r.index: r for r in res.reports if r.status == "completed"}

@@ -89,7 +89,7 @@ def physics_run(run_dir: Path, n_uavs: int, sigma: float, settle: float) -> dict
 def run_physics(ctx: ReproContext) -> tuple[PhysicsResults, int, float]:
     """The campaigns; per (case, formation) the completed runs' numbers, the runs per configuration, and the time
     (s) from which runs are judged."""
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
     from worlds.loader import load_world
 
     world = load_world(WORLD).world
@@ -103,7 +103,7 @@ def run_physics(ctx: ReproContext) -> tuple[PhysicsResults, int, float]:
             continue
         for form in PHYSICS_FORMATIONS:
             cdir = ctx.out_dir / "campaigns" / f"case{case}_{form}"
-            res = run_campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
+            res = ctx.campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
                                               duration_s=QUICK_DURATION_S if ctx.quick else None,
                                               overrides=sets + formation_overrides(form, n),
                                               workers=ctx.workers, progress=ctx.progress))

@@ -67,11 +67,11 @@ def _one(run_dir: Any, metrics: dict[str, Any]) -> dict[str, float]:
 
 def physics_cross_check(ctx: ReproContext) -> tuple[Table, list[Finding], int]:
     """Run the campaign and judge it; the table, the findings and the runs per configuration."""
-    from simulator.campaign.runner import CampaignConfig, run_campaign
+    from simulator.campaign.runner import CampaignConfig
 
     runs = 1 if ctx.quick else min(ctx.runs, RUNS)
     cdir = ctx.out_dir / "campaigns" / WORLD
-    res = run_campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
+    res = ctx.campaign(CampaignConfig(world=WORLD, runs=runs, out_dir=cdir, seed=ctx.seed,
                                       duration_s=QUICK_DURATION_S if ctx.quick else None, workers=ctx.workers,
                                       progress=ctx.progress))
     done = [_one(cdir / r.run_dir, r.metrics) for r in res.reports if r.status == "completed"]

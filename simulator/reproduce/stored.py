@@ -21,8 +21,6 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-import hashlib
-import importlib.metadata
 import json
 import logging
 import math
@@ -34,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from simulator.campaign.journal import QuietDrop, exclusive_lock, read_jsonl
+from simulator.provenance import PACKAGES, ROOT, fingerprint
 
 __all__ = ["JobStore", "StoreError", "code_fingerprint", "decode", "encode"]
 
@@ -41,9 +40,7 @@ _LOG = logging.getLogger(__name__)
 RESULTS_FILE = "results.jsonl"
 REJECTED_FILE = "results.rejected.jsonl"
 LOCK_FILE = "store.lock"
-_ROOT = Path(__file__).resolve().parents[2]
-_PACKAGES = ("autonomy", "interfaces", "simulator", "vehicles", "worlds")
-_LIBRARIES = ("numpy", "scipy", "shapely", "casadi", "pybullet")
+_ROOT = ROOT
 _KINDS = "fiub"  # ndarray dtypes a result may hold: float, int, unsigned, bool
 _TAGS = {frozenset(k) for k in (("__float__",), ("__tuple__",), ("__dict__",), ("__ndarray__", "shape", "data"),
                                 ("__dataclass__", "fields"))}
@@ -57,23 +54,14 @@ class StoreError(RuntimeError):
 def code_fingerprint(module: str) -> str:
     """SHA-256 (16 hex digits) of the source of ``module`` and of every project module it imports, directly or not
     (anywhere in a file, function-level imports included, with the packages' ``__init__`` files), of every world
-    file, and of the installed versions of the numerical libraries: whatever a job of ``module`` can compute with."""
-    h = hashlib.sha256()
-    for p in sorted(_closure(module)):
-        h.update(str(p.relative_to(_ROOT)).encode() + b"\0" + p.read_bytes() + b"\0")
-    for p in sorted((_ROOT / "worlds").rglob("*.yaml")):
-        h.update(str(p.relative_to(_ROOT)).encode() + b"\0" + p.read_bytes() + b"\0")
-    for lib in _LIBRARIES:
-        try:
-            h.update(f"{lib}={importlib.metadata.version(lib)}\0".encode())
-        except importlib.metadata.PackageNotFoundError:
-            h.update(f"{lib}=-\0".encode())
-    return h.hexdigest()[:16]
+    file, and of the installed versions of the numerical libraries: whatever a job of ``module`` can compute with
+    (:func:`simulator.provenance.fingerprint` of the closure)."""
+    return fingerprint(_closure(module))
 
 
 def _source(name: str) -> Path | None:
     """The file of project module (or package) ``name``, or None when it is not one of the project's."""
-    if name.split(".")[0] not in _PACKAGES:
+    if name.split(".")[0] not in PACKAGES:
         return None
     base = _ROOT.joinpath(*name.split("."))
     for p in (base.with_suffix(".py"), base / "__init__.py"):

@@ -48,6 +48,7 @@ def test_quick_reproduction_writes_a_report(tmp_path, paper, runs):
     assert f"[{paper}/report.md]({paper}/report.md)" in index
     if paper in PHYSICS_WORLDS:  # the cross-check on quadrotors ran its campaigns and judged them
         assert f"`worlds/{PHYSICS_WORLDS[paper]}.yaml`" in text and "On quadrotors" in text
+        assert "Provenance: all " in text and "physics runs by this source" in text  # the runs say their code
 
 
 def test_unknown_paper_and_bad_runs_are_input_errors(tmp_path, capsys):

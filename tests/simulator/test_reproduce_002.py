@@ -175,7 +175,7 @@ def test_the_papers_world_runs_the_asked_count_and_our_extensions_fewer(tmp_path
         asked[cfg.out_dir.name] = cfg.runs
         reports = [SimpleNamespace(index=i, status="completed", metrics={}, run_dir=f"runs/run-{i:05d}",
                                    wall_time_s=0.0) for i in range(cfg.runs)]
-        return SimpleNamespace(reports=reports)
+        return SimpleNamespace(reports=reports, out_dir=cfg.out_dir)
 
     class Stop(Exception):
         pass

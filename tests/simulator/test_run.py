@@ -1,5 +1,6 @@
 """Whole runs through the real physics: determinism, the run record, interruption, errors, user plugins."""
 
+import json
 import os
 import signal
 import subprocess
@@ -11,6 +12,7 @@ import pytest
 
 from simulator.api import run
 from simulator.engine import RunOptions, run_world
+from simulator.provenance import source_fingerprint
 from simulator.runrecord import load_run
 from tests.simulator.conftest import assert_records_equal
 from worlds.loader import load_world
@@ -22,6 +24,7 @@ def test_record_has_every_part(short_run):
     out = short_run.out_dir
     for name in ("world.yaml", "run.json", "metrics.json", "events.jsonl", "geometry.npz"):
         assert (out / name).is_file(), name
+    assert json.loads((out / "run.json").read_text())["code"] == source_fingerprint()  # which source made it
     m = short_run.metrics
     for key in ("sim_time_s", "wall_time_s", "real_time_factor", "seed", "uavs", "targets"):
         assert key in m, key

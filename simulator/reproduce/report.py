@@ -338,13 +338,14 @@ def _reused_text(rep: PaperReport) -> str:
 
 
 def _codes_text(rep: PaperReport) -> str:
-    """Which versions of the source made the physics runs (a campaign resumed after a change holds several)."""
-    from simulator.provenance import versions_text
+    """Which versions of the source made the physics runs, in bold unless all came from this one (a campaign resumed
+    after a change holds several)."""
+    from simulator.provenance import source_fingerprint, versions_text
 
     text = versions_text(Counter(rep.codes))
     if not text:
         return ""
-    mixed = len(rep.codes) > 1
+    mixed = set(rep.codes) != {source_fingerprint()}  # several versions, or only another one
     return (f" {'**' if mixed else ''}Provenance: {text}{'**' if mixed else ''}"
             + (" (each campaign keeps its finished runs; rerun a campaign in a fresh `--out` for one version)."
                if mixed else "."))

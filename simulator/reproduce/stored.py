@@ -40,7 +40,6 @@ _LOG = logging.getLogger(__name__)
 RESULTS_FILE = "results.jsonl"
 REJECTED_FILE = "results.rejected.jsonl"
 LOCK_FILE = "store.lock"
-_ROOT = ROOT
 _KINDS = "fiub"  # ndarray dtypes a result may hold: float, int, unsigned, bool
 _TAGS = {frozenset(k) for k in (("__float__",), ("__tuple__",), ("__dict__",), ("__ndarray__", "shape", "data"),
                                 ("__dataclass__", "fields"))}
@@ -63,7 +62,7 @@ def _source(name: str) -> Path | None:
     """The file of project module (or package) ``name``, or None when it is not one of the project's."""
     if name.split(".")[0] not in PACKAGES:
         return None
-    base = _ROOT.joinpath(*name.split("."))
+    base = ROOT.joinpath(*name.split("."))
     for p in (base.with_suffix(".py"), base / "__init__.py"):
         if p.is_file():
             return p

@@ -60,4 +60,6 @@ def test_a_report_says_when_its_physics_runs_came_from_more_than_one_source():
     text = paper_markdown(mixed, "cmd")
     assert "**Provenance: of 4 physics runs, 3 by this source" in text and "1 by code 0123**" in text
     assert "Provenance" not in paper_markdown(rep, "cmd")  # no physics runs, nothing said
+    other = paper_markdown(PaperReport(paper="003", title="t", runs=2, setup="s", codes={"0123": 2}), "cmd")
+    assert "**Provenance: of 2 physics runs, 2 by code 0123**" in other  # all by another source: flagged too
     assert verdicts_record(mixed, "cmd")["physics_runs_by_code"] == {"0123": 1, source_fingerprint(): 3}

@@ -182,9 +182,10 @@ def test_each_papers_results_come_back_from_the_store_equal(paper: str, tmp_path
 
 
 def test_the_code_fingerprint_covers_what_a_job_imports_and_not_how_reports_are_judged() -> None:
-    from simulator.reproduce.stored import _ROOT, _closure, code_fingerprint
+    from simulator.provenance import ROOT
+    from simulator.reproduce.stored import _closure, code_fingerprint
 
-    files = {str(p.relative_to(_ROOT)) for p in _closure("simulator.reproduce.paper_004_runs")}
+    files = {str(p.relative_to(ROOT)) for p in _closure("simulator.reproduce.paper_004_runs")}
     # imported through the mission, the planner and a function-level import of the run's on_step hook
     assert {"simulator/kinematic/search_mission.py", "autonomy/guidance/search/planner.py",
             "autonomy/estimation/setmem/polygons.py", "autonomy/__init__.py"} <= files

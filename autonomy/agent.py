@@ -127,6 +127,8 @@ class Agent:
         elif isinstance(self.estimator, HoldsTracks):
             self.estimate = self.fusion.fuse_tracks(t, local, self.estimator.track_reports(),
                                                     self.estimator.target_track_id, pictures)
+            if pictures and hasattr(self.estimator, "team_target"):
+                self.estimator.team_target = self.fusion.team_track_id  # followed from the next step on
         else:
             self.estimate = self.fusion.fuse(t, local, estimates)
         law = self.idle if self.estimate is None and self.idle is not None else self.guidance

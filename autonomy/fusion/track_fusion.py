@@ -124,12 +124,14 @@ class TrackFusion:
         self.config = config
         self.fusions = 0
         self.team = TeamTrackFusion(config.method, config.max_age_s, config.q)
+        self.team_track_id: int | None = None  # one's own track the last fuse_tracks took for the team's target
 
     def fuse_tracks(self, t: float, local: TargetEstimate | None, own: Sequence[TrackReport], own_target: int | None,
                     pictures: Sequence[TrackPicture]) -> TargetEstimate | None:
         """The team's target estimate at ``t`` (s) from one's own tracks and the teammates' track pictures
         (:class:`~autonomy.fusion.track_association.TeamTrackFusion`); ``local`` without a team target."""
         result = self.team.fuse(t, local, own, own_target, pictures)
+        self.team_track_id = result.own_track_id
         if result.fused_with:
             self.fusions += 1
         return result.estimate

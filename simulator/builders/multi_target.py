@@ -89,7 +89,8 @@ def _multi_config(uav: UavSpec) -> MultiTrackerConfig:
     return MultiTrackerConfig(associator=spec.associator, confirm_m=spec.confirm_m, confirm_n=spec.confirm_n,
                               detection_probability=spec.detection_probability,
                               clutter_density=spec.clutter_density, merge_distance_m=spec.merge_distance_m,
-                              merge_speed_mps=spec.merge_speed_mps, max_tracks=spec.max_tracks)
+                              merge_speed_mps=spec.merge_speed_mps, max_tracks=spec.max_tracks,
+                              class_aided=spec.class_aided)
 
 
 def multi_target(estimator: Any, world: World, uav: UavSpec, network: Any = None) -> Any:

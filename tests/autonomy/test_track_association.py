@@ -70,3 +70,44 @@ def test_stale_pictures_are_ignored_and_no_candidate_keeps_the_local_estimate():
     local = _est(50, 50)
     out = fusion.fuse(10.0, local, own, None, [old])
     assert out.estimate is local and out.fused_with == 0
+
+
+class _Tracks:
+    """A multi-target estimator that holds two tracks and believes track 1 is the target; it keeps the team's
+    choice it is given (``team_target``), as the built-in tracker does."""
+
+    def __init__(self) -> None:
+        self.team_target = None
+
+    def step(self, t, detections):
+        return self.track_reports()[0].estimate
+
+    def track_reports(self):
+        return [_rep(1, 0, 0, p=0.45), _rep(2, 200, 0, p=0.35)]
+
+    @property
+    def target_track_id(self):
+        return 1
+
+
+def test_an_agent_among_traffic_hands_the_teams_target_to_its_tracker():
+    """The teammate is sure of track 2's car: the pooled belief takes track 2, and the agent tells its tracker, which
+    follows it from its next step on (its camera then looks at the car the team follows)."""
+    from autonomy.agent import Agent
+    from autonomy.fusion.track_fusion import TrackFusion, TrackFusionConfig
+    from interfaces.setpoints import VelocitySetpoint
+    from interfaces.state import OwnState
+
+    class Hover:
+        def command(self, own, target, teammates, t):
+            return VelocitySetpoint(v_W=np.zeros(3), yaw=0.0)
+
+    est = _Tracks()
+    agent = Agent("a", est, Hover(), fusion=TrackFusion(TrackFusionConfig(method="covariance_intersection", q=0.0)))
+    own = OwnState(t=10.0, p_W=np.zeros(3), v_W=np.zeros(3), yaw=0.0)
+    mate = TrackPicture(t=10.0, tracks=(_rep(9, 201, 1, p=0.95),), target_track_id=9)
+    out = agent.step(10.0, own, [], [mate])
+    assert est.team_target == 2 and out.estimate.p_W[0] > 100.0 and out.local_estimate.p_W[0] == 0.0
+    lone = TrackPicture(t=10.0, tracks=(_rep(4, 900, 0, p=0.1),), target_track_id=4)
+    agent.step(10.0, own, [], [lone])  # "in no track" is likelier for the team (0.54 against 0.225 and 0.06):
+    assert est.team_target is None     # no team choice, the tracker's own belief stands

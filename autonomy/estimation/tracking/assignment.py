@@ -28,6 +28,7 @@ from scipy.optimize import linear_sum_assignment
 from autonomy.estimation.measurements import MeasurementLike
 
 from . import assignment_kernels as kernels
+from .class_affinity import ClassAffinity
 from .gate import ChiSquareGate, PredictedNis
 from .scan_gate import GatedCosts, ScanGating
 from .track import Track
@@ -133,10 +134,15 @@ class GlobalNearestNeighbourAssociator:
         the many small components of a sparse gate).
     kdtree_min_pairs : int
         From how many pairs radar and position detections are pre-gated with a k-d tree (:class:`ScanGating`).
+    affinity : ClassAffinity or None
+        Classification-aided association (:mod:`.class_affinity`): a gated pair's cost loses ``2 log λ`` of its
+        detection's class readings against the track's (after the miss costs are set from the kinematic costs, so an
+        adverse reading can leave a track without a detection). None: kinematics alone.
     """
 
     def __init__(self, gate: ChiSquareGate, distance: PredictedNis, miss_cost: float | None = None,
-                 max_enumerated: int = 500, kdtree_min_pairs: int = 40_000) -> None:
+                 max_enumerated: int = 500, kdtree_min_pairs: int = 40_000,
+                 affinity: ClassAffinity | None = None) -> None:
         if int(max_enumerated) != max_enumerated or max_enumerated < 1:
             raise ValueError(f"GlobalNearestNeighbourAssociator.max_enumerated must be an integer >= 1, got "
                              f"{max_enumerated!r}")
@@ -146,6 +152,7 @@ class GlobalNearestNeighbourAssociator:
         self.gate = gate
         self.gating = ScanGating(gate, distance, kdtree_min_pairs)
         self.miss_cost = miss_cost
+        self.affinity = affinity
 
     def assign(self, tracks: Sequence[Track], scan: Sequence[MeasurementLike]) -> ScanAssignment:
         """The assignment of ``scan`` (the detections of one sensor and one time) to ``tracks``."""
@@ -158,6 +165,10 @@ class GlobalNearestNeighbourAssociator:
             np.maximum.at(miss, rows, c - costs.nis[rows, cols] + pair_thresholds(self.gate, costs))
         else:
             miss = np.full(costs.shape[0], float(self.miss_cost))
+        if self.affinity is not None and rows.size:
+            log_ratio = self.affinity.log_ratios(tracks, dets, rows, cols)
+            if log_ratio is not None:
+                c = c - 2.0 * log_ratio
         n_t, n_d = costs.shape
         order, starts = kernels.pair_clusters(rows, cols, n_t)
         take, hard = kernels.gnn_clusters(rows, cols, c, miss, order, starts, n_t, n_d, self.max_enumerated)

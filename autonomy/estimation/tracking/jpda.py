@@ -36,6 +36,7 @@ from autonomy.estimation.measurements import MeasurementLike
 
 from . import assignment_kernels as kernels
 from .assignment import ScanAssignment, sensor_groups, single_group, unused_and_gated_out
+from .class_affinity import ClassAffinity
 from .gate import ChiSquareGate, PredictedNis
 from .scan_gate import GatedCosts, ScanGating
 from .track import Track
@@ -62,6 +63,9 @@ class JointProbabilisticAssociator:
     kdtree_min_pairs : int
         From how many pairs radar and position detections are pre-gated with a k-d tree
         (:class:`~.scan_gate.ScanGating`).
+    affinity : ClassAffinity or None
+        Classification-aided association (:mod:`.class_affinity`): a gated pair's log-likelihood ratio gains the
+        ``log λ`` of its detection's class readings against the track's. None: kinematics alone.
 
     Attributes
     ----------
@@ -70,7 +74,8 @@ class JointProbabilisticAssociator:
     """
 
     def __init__(self, gate: ChiSquareGate, distance: PredictedNis, detection_probability: float,
-                 clutter_density: float, max_cluster_events: int = 10_000, kdtree_min_pairs: int = 40_000) -> None:
+                 clutter_density: float, max_cluster_events: int = 10_000, kdtree_min_pairs: int = 40_000,
+                 affinity: ClassAffinity | None = None) -> None:
         if not 0.0 < detection_probability <= 1.0:
             raise ValueError(f"JointProbabilisticAssociator.detection_probability must be in (0, 1], got "
                              f"{detection_probability!r}")
@@ -85,20 +90,26 @@ class JointProbabilisticAssociator:
         self.detection_probability = float(detection_probability)
         self.clutter_density = float(clutter_density)
         self.max_cluster_events = int(max_cluster_events)
+        self.affinity = affinity
         self.approximated = 0
 
     def assign(self, tracks: Sequence[Track], scan: Sequence[MeasurementLike]) -> ScanAssignment:
         """β of ``scan`` (the detections of one sensor and one time) against ``tracks``."""
         dets = single_group(scan)
         costs = self.gating(tracks, dets)
-        return self.assign_costs(dets, costs)
+        extra = None
+        if self.affinity is not None and costs.rows.size:
+            extra = self.affinity.log_ratios(tracks, dets, costs.rows, costs.cols)
+        return self.assign_costs(dets, costs, extra)
 
     def assign_groups(self, tracks: Sequence[Track], scan: Sequence[MeasurementLike]) -> list[ScanAssignment]:
         """One :meth:`assign` per sensor group of ``scan``, in order of first appearance."""
         return [self.assign(tracks, g) for g in sensor_groups(scan)]
 
-    def assign_costs(self, dets: tuple[MeasurementLike, ...], costs: GatedCosts) -> ScanAssignment:
-        """β from already gated costs of ``dets``."""
+    def assign_costs(self, dets: tuple[MeasurementLike, ...], costs: GatedCosts,
+                     extra: np.ndarray | None = None) -> ScanAssignment:
+        """β from already gated costs of ``dets`` (``extra``: a log-likelihood ratio added to each gated pair's,
+        e.g. the class readings' ``log λ``, :mod:`.class_affinity`)."""
         n_t, n_d = costs.shape
         beta = np.zeros((n_t, n_d + 1))
         beta[:, 0] = 1.0
@@ -106,6 +117,8 @@ class JointProbabilisticAssociator:
             self.detection_probability * self.gate.probability < 1.0) else -np.inf
         rows, cols = costs.rows, costs.cols
         log_ratio = -0.5 * costs.cost[rows, cols] + math.log(self.detection_probability / self.clutter_density)
+        if extra is not None:
+            log_ratio = log_ratio + extra
         order, starts = kernels.pair_clusters(rows, cols, n_t)
         beta, failed = kernels.jpda_clusters(rows, cols, log_ratio, log_miss, order, starts, n_t, n_d,
                                              self.max_cluster_events)

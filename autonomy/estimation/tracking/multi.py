@@ -36,6 +36,7 @@ from autonomy.estimation.scif import SqrtInformation, add_information
 from interfaces.state import TargetEstimate, TrackReport
 
 from .batch_update import update_pairs
+from .class_affinity import ClassAffinity
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
 from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, track_evidence
@@ -73,6 +74,8 @@ class MultiTrackerConfig:
         scan updated both with different detections).
     max_tracks : int
         Most live tracks (>= 1); no new track starts beyond it (counted in ``starts_refused``).
+    class_aided : bool
+        Whether detections' class readings weigh in their association (:mod:`.class_affinity`).
     """
 
     associator: Literal["gnn", "jpda"] = "gnn"
@@ -83,6 +86,7 @@ class MultiTrackerConfig:
     merge_distance_m: float = 4.0
     merge_speed_mps: float = 2.0
     max_tracks: int = 500
+    class_aided: bool = True
 
     def __post_init__(self) -> None:
         if self.associator not in ("gnn", "jpda"):
@@ -139,8 +143,9 @@ class MultiTargetTracker:
                                           tentative_window_s=config.tentative_window_s,
                                           initial_speed_sigma=config.initial_speed_sigma)
         self.gate = ChiSquareGate(config.gate_probability)
-        self.associator = _associator(multi, self.gate, model, config.target_height, gating_filter)
         self.identity = TargetIdentity(identity)
+        affinity = ClassAffinity(identity.background, identity.swap_probability) if multi.class_aided else None
+        self.associator = _associator(multi, self.gate, model, config.target_height, gating_filter, affinity)
         self.tracks: list[Track] = []
         self._ix = [self.layout.index("x"), self.layout.index("y")]
         self._iv = [self.layout.index("vx"), self.layout.index("vy")]
@@ -482,15 +487,15 @@ class MultiTargetTracker:
 
 
 def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionModel, target_height: float,
-                gating_filter: Callable[[Filter], Filter] | None) -> object:
+                gating_filter: Callable[[Filter], Filter] | None, affinity: ClassAffinity | None = None) -> object:
     """The configured associator of a scan's detections to many tracks."""
     from .assignment import GlobalNearestNeighbourAssociator
     from .jpda import JointProbabilisticAssociator
 
     distance = PredictedNis(model, target_height, gating_filter)
     if multi.associator == "gnn":
-        return GlobalNearestNeighbourAssociator(gate, distance)
+        return GlobalNearestNeighbourAssociator(gate, distance, affinity=affinity)
     return JointProbabilisticAssociator(gate, distance, detection_probability=multi.detection_probability,
-                                        clutter_density=multi.clutter_density)
+                                        clutter_density=multi.clutter_density, affinity=affinity)
 
 

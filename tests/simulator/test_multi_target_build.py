@@ -54,6 +54,21 @@ def test_built_in_trackers_become_multi_target_and_plugins_are_wrapped():
     assert isinstance(wrapped, TargetGatedEstimator) and isinstance(wrapped.inner, Mine)
 
 
+@pytest.mark.parametrize("associator", ["gnn", "jpda"])
+def test_class_readings_weigh_in_association_unless_the_world_says_not(associator):
+    sets = [f"uavs[0].autonomy.estimator.tracking.associator={associator}"]
+    for extra, aided in (([], True), (["uavs[0].autonomy.estimator.tracking.class_aided=false"], False)):
+        loaded = load_world("demo", sets + extra)
+        world = loaded.world
+        network = build_geometry(world, loaded.path, np.random.default_rng(1)).network
+        est = multi_target(build_estimator(world.uavs[0], 0, network), world, world.uavs[0], network)
+        affinity = est.associator.affinity
+        assert (affinity is not None) == aided
+        if aided:  # the traffic census the identity belief uses, and its swap hazard
+            assert affinity.background.keys() == est.identity.config.background.keys()
+            assert affinity.swap_probability == est.identity.config.swap_probability
+
+
 def test_base_station_fusion_among_traffic_is_refused_with_the_key_path(tmp_path):
     from simulator.api import run
 

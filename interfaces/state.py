@@ -87,7 +87,7 @@ class TargetEstimate:
         if self.P is not None:
             P = np.array(self.P, dtype=float)
             n = 2 * p.shape[0]
-            if P.shape != (n, n) or not np.all(np.isfinite(P)):
+            if P.shape != (n, n) or not np.isfinite(P).all():
                 raise ValueError(f"TargetEstimate.P must be a finite ({n}, {n}) array, got shape {P.shape}")
             P.setflags(write=False)
             object.__setattr__(self, "P", P)

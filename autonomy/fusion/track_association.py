@@ -4,7 +4,7 @@ Each UAV with a multi-target tracker shares a :class:`~interfaces.state.TrackPic
 target probabilities and the class evidence of its own sensors). At a fusion step, for each teammate's picture no
 older than ``max_age_s``:
 
-1. every track is predicted to the fusion time (constant velocity, :func:`~.track_fusion.predict_estimates`);
+1. every track is predicted to the fusion time (constant velocity, :class:`~.track_fusion.PredictedEstimates`);
 2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
    does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
@@ -35,9 +35,9 @@ from scipy.special import gammaincinv
 from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-from .track_fusion import fuse_estimates, predict_estimates
+from .track_fusion import PredictedEstimates, fuse_estimates
 
-__all__ = ["TeamTrackFusion", "TeamTarget", "associate_tracks", "track_picture"]
+__all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "track_picture"]
 
 
 @dataclass(frozen=True)
@@ -77,10 +77,16 @@ def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstima
     least total Mahalanobis position distance among the pairs under ``threshold`` (χ², 2 degrees of freedom)."""
     if not own or not other:
         return []
-    pa = np.array([e.p_W[:2] for e in own])
-    pb = np.array([e.p_W[:2] for e in other])
-    Pa = np.array([e.P[:2, :2] for e in own])
-    Pb = np.array([e.P[:2, :2] for e in other])
+    return associate_positions(np.array([e.p_W[:2] for e in own]), np.array([e.P[:2, :2] for e in own]),
+                               np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold)
+
+
+def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray,
+                        threshold: float) -> list[tuple[int, int]]:
+    """:func:`associate_tracks` of positions ``pa`` (n, 2) and ``pb`` (m, 2) (m) with covariances ``Pa`` (n, 2, 2) and
+    ``Pb`` (m, 2, 2) (m²)."""
+    if len(pa) == 0 or len(pb) == 0:
+        return []
     d = pa[:, None, :] - pb[None, :, :]                      # (n, m, 2)
     S = Pa[:, None] + Pb[None, :]                            # (n, m, 2, 2)
     det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
@@ -128,12 +134,13 @@ class TeamTrackFusion:
         """The team's target at ``t`` (s) from one's own confirmed tracks ``own`` (``own_target`` the one taken for
         the target; ``local`` one's own target estimate) and the teammates' ``pictures`` (module docstring)."""
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
-        own_est = predict_estimates([r.estimate for r in mine], t, self.q)
+        own_est = PredictedEstimates([r.estimate for r in mine], t, self.q)
+        own_xy, own_P = own_est.xy, own_est.P_xy
         pooled = np.array([r.target_probability for r in mine], dtype=float)
         own_none = max(0.0, 1.0 - float(pooled.sum()))
         none = 0.0  # the members' pooled "in no track", one's own share added after the loop
-        fused_parts: list[list[TargetEstimate]] = [[] for _ in mine]
-        loose: list[tuple[float, TargetEstimate]] = []
+        fused_parts: list[list[tuple[PredictedEstimates, int]]] = [[] for _ in mine]
+        loose: list[tuple[float, PredictedEstimates, int]] = []
         members = 1
         for pic in pictures:
             if not 0.0 <= t - pic.t <= self.max_age_s:
@@ -141,17 +148,17 @@ class TeamTrackFusion:
             members += 1
             none += max(0.0, 1.0 - sum(r.target_probability for r in pic.tracks))
             theirs = [r for r in pic.tracks if r.estimate.P is not None]
-            their_est = predict_estimates([r.estimate for r in theirs], t, self.q)
-            pairs = associate_tracks(own_est, their_est, self.threshold)
+            their_est = PredictedEstimates([r.estimate for r in theirs], t, self.q)
+            pairs = associate_positions(own_xy, own_P, their_est.xy, their_est.P_xy, self.threshold)
             self.associated += len(pairs)
             taken = set()
             for i, j in pairs:
                 pooled[i] += theirs[j].target_probability
-                fused_parts[i].append(their_est[j])
+                fused_parts[i].append((their_est, j))
                 taken.add(j)
-            loose.extend((theirs[j].target_probability, their_est[j]) for j in range(len(theirs))
+            loose.extend((theirs[j].target_probability, their_est, j) for j in range(len(theirs))
                          if j not in taken and theirs[j].target_probability > 0.0)
-        none += own_none * max(0.0, 1.0 - sum(p for p, _ in loose))  # one's own share of "no track"
+        none += own_none * max(0.0, 1.0 - sum(p for p, _, _ in loose))  # one's own share of "no track"
         best_own = int(np.argmax(pooled)) if len(pooled) else -1
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
         p_own = float(pooled[best_own]) / members if best_own >= 0 else 0.0
@@ -163,8 +170,9 @@ class TeamTrackFusion:
             track_id = mine[best_own].track_id
             if track_id != own_target:
                 self.disagreements += 1
-            parts = [own_est[best_own], *fused_parts[best_own]]
+            parts = [own_est[best_own], *(pred[j] for pred, j in fused_parts[best_own])]
             return TeamTarget(estimate=fuse_estimates(self.method, t, parts), probability=p_own, own_track_id=track_id,
                               fused_with=len(parts) - 1)
         self.disagreements += 1
-        return TeamTarget(estimate=loose[best_loose][1], probability=p_loose, own_track_id=None, fused_with=0)
+        _, pred, j = loose[best_loose]
+        return TeamTarget(estimate=pred[j], probability=p_loose, own_track_id=None, fused_with=0)

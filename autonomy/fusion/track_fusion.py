@@ -18,7 +18,8 @@ import numpy as np
 from autonomy.fusion.convex import covariance_intersection, state_vector_fusion
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-__all__ = ["TrackFusionConfig", "TrackFusion", "fuse_estimates", "predict_estimate", "predict_estimates"]
+__all__ = ["PredictedEstimates", "TrackFusionConfig", "TrackFusion", "fuse_estimates", "predict_estimate",
+           "predict_estimates"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,31 +69,77 @@ def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
 
 
 def predict_estimates(ests: Sequence[TargetEstimate], t: float, q: float) -> list[TargetEstimate]:
-    """:func:`predict_estimate` of every estimate, the covariances in one stacked product: the same numbers (the
-    stacked matrix product multiplies slice by slice as the single one does, and each Q is built in the same float
-    operations), for a team's track pictures of tens of tracks each."""
-    todo = [k for k, e in enumerate(ests) if t - e.t != 0.0 and e.P is not None and e.p_W.size == 2]
-    out = list(ests)
-    if len(todo) < 2:
-        return [predict_estimate(e, t, q) for e in ests]
-    dts = [t - ests[k].t for k in todo]
-    F = np.tile(np.eye(4), (len(todo), 1, 1))
-    F[:, 0, 2] = F[:, 1, 3] = dts
-    Q = np.zeros((len(todo), 4, 4))
-    for m, dt in enumerate(dts):
-        a, b, c = abs(dt) ** 3 / 3 * q, dt ** 2 / 2 * q, abs(dt) * q
-        Q[m, 0, 0] = Q[m, 1, 1] = a
-        Q[m, 0, 2] = Q[m, 1, 3] = Q[m, 2, 0] = Q[m, 3, 1] = b
-        Q[m, 2, 2] = Q[m, 3, 3] = c
-    P = F @ np.stack([ests[k].P for k in todo]) @ F.transpose(0, 2, 1) + Q
-    for m, k in enumerate(todo):
-        e = ests[k]
-        out[k] = TargetEstimate(t=t, p_W=e.p_W + dts[m] * e.v_W, v_W=e.v_W, P=P[m])
-    done = set(todo)
-    for k, e in enumerate(ests):
-        if k not in done:
-            out[k] = predict_estimate(e, t, q)
-    return out
+    """:func:`predict_estimate` of every estimate (:class:`PredictedEstimates`, every one made)."""
+    return list(PredictedEstimates(ests, t, q))
+
+
+class PredictedEstimates(Sequence[TargetEstimate]):
+    """:func:`predict_estimate` of every estimate of ``ests`` to ``t`` (s), for a team's track pictures of tens of
+    tracks each: the horizontal positions (:attr:`xy`) and their covariances (:attr:`P_xy`) as arrays at once, for
+    association, and an estimate made only when it is read (a fusion step uses a few of them).
+
+    The 2-D estimates with a covariance and a time other than ``t`` are predicted together, their covariances in one
+    stacked product: the same numbers as one at a time (the stacked matrix product multiplies slice by slice as the
+    single one does, each Q is built in the same float operations, and ``p + Δt·v`` is the same elementwise
+    arithmetic); the others (none or one such estimate, no covariance, 3-D, already at ``t``) one at a time.
+    """
+
+    def __init__(self, ests: Sequence[TargetEstimate], t: float, q: float) -> None:
+        self._ests, self._t = list(ests), t
+        todo = [k for k, e in enumerate(self._ests) if t - e.t != 0.0 and e.P is not None and e.p_W.size == 2]
+        if len(todo) < 2:
+            todo = []
+        self._row = {k: m for m, k in enumerate(todo)}
+        self._made: dict[int, TargetEstimate] = {k: predict_estimate(e, t, q)
+                                                 for k, e in enumerate(self._ests) if k not in self._row}
+        self._p = self._P = np.zeros((0,))
+        if todo:
+            dts = [t - self._ests[k].t for k in todo]
+            F = np.tile(np.eye(4), (len(todo), 1, 1))
+            F[:, 0, 2] = F[:, 1, 3] = dts
+            Q = np.zeros((len(todo), 4, 4))
+            for m, dt in enumerate(dts):
+                a, b, c = abs(dt) ** 3 / 3 * q, dt ** 2 / 2 * q, abs(dt) * q
+                Q[m, 0, 0] = Q[m, 1, 1] = a
+                Q[m, 0, 2] = Q[m, 1, 3] = Q[m, 2, 0] = Q[m, 3, 1] = b
+                Q[m, 2, 2] = Q[m, 3, 3] = c
+            self._P = F @ np.stack([self._ests[k].P for k in todo]) @ F.transpose(0, 2, 1) + Q
+            self._p = (np.stack([self._ests[k].p_W for k in todo])
+                       + np.array(dts)[:, None] * np.stack([self._ests[k].v_W for k in todo]))
+
+    def __len__(self) -> int:
+        return len(self._ests)
+
+    def __getitem__(self, k: int) -> TargetEstimate:  # type: ignore[override]
+        k = range(len(self._ests))[k]
+        est = self._made.get(k)
+        if est is None:
+            m = self._row[k]
+            est = self._made[k] = TargetEstimate(t=self._t, p_W=self._p[m], v_W=self._ests[k].v_W, P=self._P[m])
+        return est
+
+    @property
+    def xy(self) -> np.ndarray:
+        """(n, 2) predicted horizontal positions (m)."""
+        out = np.zeros((len(self._ests), 2))
+        if self._row:
+            out[list(self._row)] = self._p[:, :2]
+        for k in set(self._made) - set(self._row):
+            out[k] = self._made[k].p_W[:2]
+        return out
+
+    @property
+    def P_xy(self) -> np.ndarray:
+        """(n, 2, 2) covariances of :attr:`xy` (m²); a ValueError if an estimate has no covariance."""
+        out = np.zeros((len(self._ests), 2, 2))
+        if self._row:
+            out[list(self._row)] = self._P[:, :2, :2]
+        for k in set(self._made) - set(self._row):
+            P = self._made[k].P
+            if P is None:
+                raise ValueError(f"estimate {k} has no covariance to associate it by")
+            out[k] = P[:2, :2]
+        return out
 
 
 def fuse_estimates(method: str, t: float, parts: Sequence[TargetEstimate]) -> TargetEstimate:

@@ -72,8 +72,10 @@ class GospaResult:
 def gospa(truth: np.ndarray, estimates: np.ndarray, c: float, p: float = 2.0) -> GospaResult:
     """GOSPA with α = 2: ``d = (min over assignments of Σ ‖x − y‖^p + c^p/2 (#missed + #false))^{1/p}``.
 
-    Pairs farther apart than ``c`` are better left unassigned (each costs ``c^p/2``), which is how the assignment
-    is solved: a square cost matrix padded with ``c^p/2`` per unassigned point.
+    Pairs farther apart than ``c`` are better left unassigned (each costs ``c^p/2``, as much as leaving both points
+    unassigned): with ``D = min(‖x − y‖^p, c^p)``, the best assignment is a maximum matching of least
+    ``Σ (D − c^p)``, solved as a rectangular assignment among the points that have some partner nearer than ``c``
+    (a point without one is unassigned in every best assignment); its pairs with ``D < c^p`` are the assigned ones.
     """
     _check(c, p)
     X, Y = _as_points(truth), _as_points(estimates)
@@ -82,14 +84,14 @@ def gospa(truth: np.ndarray, estimates: np.ndarray, c: float, p: float = 2.0) ->
     if m == 0 or n == 0:
         return GospaResult(distance=float(((m + n) * half) ** (1.0 / p)), localisation=0.0, missed=m, false=n)
     D = np.minimum(np.linalg.norm(X[:, None, :] - Y[None, :, :], axis=-1) ** p, 2.0 * half)
-    big = np.full((m + n, m + n), 0.0)
-    big[:m, :n] = D
-    big[:m, n:] = np.where(np.eye(m, dtype=bool), half, np.inf)  # truth i unassigned
-    big[m:, :n] = np.where(np.eye(n, dtype=bool), half, np.inf)  # estimate j unassigned
-    big[m:, n:] = 0.0
-    r, col = linear_sum_assignment(big)
-    assigned = [(i, j) for i, j in zip(r, col, strict=True) if i < m and j < n and D[i, j] < 2.0 * half]
-    loc = float(sum(D[i, j] for i, j in assigned))
-    missed, false = m - len(assigned), n - len(assigned)
+    near = D < 2.0 * half
+    rows, cols = np.flatnonzero(near.any(axis=1)), np.flatnonzero(near.any(axis=0))
+    loc, k = 0.0, 0
+    if len(rows):
+        sub = D[np.ix_(rows, cols)]
+        r, col = linear_sum_assignment(sub - 2.0 * half)
+        pairs = sorted((int(rows[i]), int(cols[j])) for i, j in zip(r, col, strict=True) if sub[i, j] < 2.0 * half)
+        loc, k = float(sum(D[i, j] for i, j in pairs)), len(pairs)
+    missed, false = m - k, n - k
     total = loc + half * (missed + false)
     return GospaResult(distance=float(total ** (1.0 / p)), localisation=loc, missed=missed, false=false)

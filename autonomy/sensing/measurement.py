@@ -45,6 +45,10 @@ def azimuth_elevation(d_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.arctan2(d[:, 1], d[:, 0]), np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1]))
 
 
+_CHECKED_CONFUSIONS: dict[int, np.ndarray] = {}
+"""Read-only confusion matrices (owning their data) already checked, by id; kept here so that no id is reused."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class ClassMeasurement:
     """A sensor's reading of one class attribute of what it detected (a car's colour, body type, length class).
@@ -66,15 +70,23 @@ class ClassMeasurement:
     confusion: np.ndarray
 
     def __post_init__(self) -> None:
-        C = np.array(self.confusion, dtype=float)
-        if C.ndim != 2 or C.shape[0] != C.shape[1] or C.shape[0] < 1:
-            raise ValueError(f"ClassMeasurement.confusion must be a square (K, K) array, got shape {C.shape}")
-        if np.any(C < 0) or not np.allclose(C.sum(axis=1), 1.0, atol=1e-9):
-            raise ValueError("ClassMeasurement.confusion must have non-negative rows that sum to 1")
+        C = self.confusion
+        if _CHECKED_CONFUSIONS.get(id(C)) is not C:  # a sensor hands the same read-only matrix to every reading
+            C = np.array(C, dtype=float)
+            if C.ndim != 2 or C.shape[0] != C.shape[1] or C.shape[0] < 1:
+                raise ValueError(f"ClassMeasurement.confusion must be a square (K, K) array, got shape {C.shape}")
+            if np.any(C < 0) or not np.allclose(C.sum(axis=1), 1.0, atol=1e-9):
+                raise ValueError("ClassMeasurement.confusion must have non-negative rows that sum to 1")
+            C.setflags(write=False)
+            given = self.confusion
+            if isinstance(given, np.ndarray) and given.base is None and not given.flags.writeable \
+                    and given.dtype == np.float64 and np.array_equal(given, C):
+                if len(_CHECKED_CONFUSIONS) >= 256:
+                    _CHECKED_CONFUSIONS.clear()
+                _CHECKED_CONFUSIONS[id(given)] = given
         if int(self.observed) != self.observed or not 0 <= self.observed < C.shape[0]:
             raise ValueError(f"ClassMeasurement.observed must be a class index in [0, {C.shape[0]}), "
                              f"got {self.observed!r}")
-        C.setflags(write=False)
         object.__setattr__(self, "confusion", C)
         object.__setattr__(self, "observed", int(self.observed))
 

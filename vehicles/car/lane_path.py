@@ -80,6 +80,38 @@ def _sampled(road: RoadLike, a: float, b: float, n: int, offset: float) -> tuple
     return out
 
 
+_JOINS: dict[tuple[int, int, float, float], tuple[object, object, bool]] = {}
+_CORNERS: dict[tuple, tuple[object, object, tuple[np.ndarray, ...]]] = {}
+_JOINS_MAX = _CORNERS_MAX = 8192  # junctions kept (a city's worth; cleared whole when full, like _SAMPLES)
+
+
+def _corner(prev: RoadLike, road: RoadLike, end: tuple[np.ndarray, np.ndarray], start: tuple[np.ndarray, np.ndarray],
+            cut_prev: float, cut: float, ds: float) -> tuple[np.ndarray, ...]:
+    """(points, headings, curvatures, road arc lengths) of the inner samples of the junction corner from ``prev``'s
+    cut end (point and heading ``end``) into ``road``'s cut start (``start``), kept by its exact inputs: a city's cars
+    turn through the same junctions again and again. The same numbers as :func:`_bezier` of those inputs."""
+    p0, h0 = end
+    p3, h3 = start
+    key = (id(prev), id(road), cut_prev, cut, ds, np.concatenate([p0, p3, [h0, h3]]).tobytes())
+    hit = _CORNERS.get(key)
+    if hit is not None and hit[0] is prev and hit[1] is road:
+        return hit[2]
+    pts, ch, ck = _bezier(p0, np.array([math.cos(h0), math.sin(h0)]), p3, np.array([math.cos(h3), math.sin(h3)]),
+                          max(3, int(math.ceil(2 * (cut_prev + cut) / ds)) + 1))
+    inner = slice(1, -1)
+    m = len(pts) - 2
+    half = m // 2
+    u = np.linspace(0, 1, m + 2)[1:-1]
+    rs = np.where(np.arange(m) < half, prev.length - cut_prev + 2 * u * cut_prev, (2 * u - 1) * cut)
+    out = (pts[inner], ch[inner], ck[inner], rs)
+    for arr in out:
+        arr.setflags(write=False)
+    if len(_CORNERS) >= _CORNERS_MAX:
+        _CORNERS.clear()
+    _CORNERS[key] = (prev, road, out)
+    return out
+
+
 @njit(cache=True)
 def _closest_segment(xy: np.ndarray, t: np.ndarray, seg: np.ndarray, lo: int, hi: int, px: float,
                      py: float) -> tuple[int, float, float]:
@@ -173,19 +205,14 @@ class LanePath:
                 junction_index.append(sum(len(x) for x in xy) - 1)
                 s, p, h, kap, n = s[1:], p[1:], h[1:], kap[1:], n - 1
             elif k > 0:  # corner from the previous road's cut end into this road's cut start
-                prev = roads[k - 1]
-                pts, ch, ck = _bezier(xy[-1][-1], np.array([math.cos(hd[-1][-1]), math.sin(hd[-1][-1])]),
-                                      p[0], np.array([math.cos(h[0]), math.sin(h[0])]),
-                                      max(3, int(math.ceil(2 * (cuts[k - 1] + cuts[k]) / ds)) + 1))
-                inner = slice(1, -1)
-                m = len(pts) - 2
+                pts, ch, ck, corner_s = _corner(roads[k - 1], road, (xy[-1][-1], float(hd[-1][-1])),
+                                                (p[0], float(h[0])), cuts[k - 1], cuts[k], ds)
+                m = len(pts)
                 half = m // 2
-                xy.append(pts[inner]), hd.append(ch[inner]), kp.append(ck[inner])
-                ri.append(np.r_[np.full(half, k - 1), np.full(m - half, k)])
+                xy.append(pts), hd.append(ch), kp.append(ck)
+                ri.append(np.concatenate([np.full(half, k - 1), np.full(m - half, k)]))
                 cm.append(np.ones(m, dtype=bool))
-                u = np.linspace(0, 1, m + 2)[1:-1]
-                rs.append(np.where(np.arange(m) < half, prev.length - cuts[k - 1] + 2 * u * cuts[k - 1],
-                                   (2 * u - 1) * cuts[k]))
+                rs.append(corner_s)
                 junction_index.append(sum(len(x) for x in xy[:-1]) - 1)
             xy.append(p), hd.append(h), kp.append(kap), ri.append(np.full(n, k)), rs.append(s)
             cm.append(np.zeros(n, dtype=bool))
@@ -197,8 +224,8 @@ class LanePath:
         self.in_corner = np.concatenate(cm)
         seg = np.linalg.norm(np.diff(self.xy, axis=0), axis=1)
         self.s = np.r_[0.0, np.cumsum(seg)]
-        self.speed_limit = np.array([roads[i].speed_limit for i in self.road_index])
-        self.lane_offset = np.array([offsets[i] for i in self.road_index])
+        self.speed_limit = np.array([r.speed_limit for r in roads], dtype=float)[self.road_index]
+        self.lane_offset = np.array(offsets, dtype=float)[self.road_index]
         js = self.s[np.asarray(junction_index, dtype=int)] if junction_index else np.zeros(0)
         # the stop line of a smooth join (no corner) is still ``corner_length`` before the node
         self.junction_s = np.maximum(js - np.where(np.asarray(smooth, dtype=bool), corner_length, 0.0), 0.0)
@@ -213,11 +240,20 @@ class LanePath:
 
     @staticmethod
     def _smooth_join(a: RoadLike, b: RoadLike, off_a: float, off_b: float) -> bool:
-        """True when lane ``a`` runs on into lane ``b`` without a heading or position jump (no corner needed)."""
+        """True when lane ``a`` runs on into lane ``b`` without a heading or position jump (no corner needed); kept
+        per pair of lanes."""
+        key = (id(a), id(b), off_a, off_b)
+        hit = _JOINS.get(key)
+        if hit is not None and hit[0] is a and hit[1] is b:
+            return hit[2]
         _, pa, ha, _ = _sampled(a, a.length, a.length, 1, off_a)
         _, pb, hb, _ = _sampled(b, 0.0, 0.0, 1, off_b)
         jump = abs(float(_wrap(hb[0] - ha[0])))
-        return jump < _SMOOTH_HEADING and float(np.linalg.norm(pb[0] - pa[0])) < _SMOOTH_GAP
+        smooth = jump < _SMOOTH_HEADING and float(np.linalg.norm(pb[0] - pa[0])) < _SMOOTH_GAP
+        if len(_JOINS) >= _JOINS_MAX:
+            _JOINS.clear()
+        _JOINS[key] = (a, b, smooth)
+        return smooth
 
     @property
     def length(self) -> float:

@@ -149,6 +149,7 @@ class MultiTargetTracker:
         self.tracks: list[Track] = []
         self._ix = [self.layout.index("x"), self.layout.index("y")]
         self._iv = [self.layout.index("vx"), self.layout.index("vy")]
+        self._ipv = np.ix_(self._ix + self._iv, self._ix + self._iv)  # (x, y, vx, vy) block of a covariance
         self._next_id = 1
         self._target: int | None = None
         self.updates = 0
@@ -481,9 +482,8 @@ class MultiTargetTracker:
         return None
 
     def _estimate(self, track: Track) -> TargetEstimate:
-        x, P = track.filter.x, track.filter.P
-        idx = self._ix + self._iv
-        return TargetEstimate(t=track.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=P[np.ix_(idx, idx)])
+        x = track.filter.x
+        return TargetEstimate(t=track.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=track.filter.P[self._ipv])
 
 
 def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionModel, target_height: float,

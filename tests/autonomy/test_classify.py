@@ -197,3 +197,22 @@ def test_camera_classification_changes_no_other_number_and_reads_colour_and_body
             colour, body = db.classes
             assert (colour.attribute, body.attribute) == ("colour", "body")
             assert CAR_COLOURS[colour.observed] == {10: "red", 11: "white"}[int(tid)]  # identity confusion
+
+
+def test_a_reading_checks_a_confusion_matrix_it_has_not_seen_and_keeps_a_writable_one_unchecked():
+    from autonomy.sensing.measurement import ClassMeasurement
+
+    clf = Classifier.for_attribute("colour", accuracy=0.9)
+    rng = np.random.default_rng(3)
+    first, second = clf.read(2, rng), clf.read(2, rng)
+    assert second.confusion is clf.matrix  # checked once, then handed on as it is
+    np.testing.assert_array_equal(first.confusion, clf.matrix)
+    bad = np.array([[0.5, 0.6], [0.5, 0.5]])
+    with pytest.raises(ValueError, match="sum to 1"):
+        ClassMeasurement(attribute="colour", observed=0, confusion=bad)
+    good = np.array([[0.9, 0.1], [0.2, 0.8]])  # writable: copied at each reading, never taken on trust
+    m = ClassMeasurement(attribute="colour", observed=1, confusion=good)
+    good[0, 0] = 5.0
+    assert m.confusion[0, 0] == 0.9
+    with pytest.raises(ValueError, match="sum to 1"):
+        ClassMeasurement(attribute="colour", observed=1, confusion=good)

@@ -92,6 +92,32 @@ def test_gospa_decomposition():
     assert empty.distance == pytest.approx(10.0) and empty.missed == 2
 
 
+
+def _gospa_by_enumeration(X: np.ndarray, Y: np.ndarray, c: float, p: float) -> float:
+    """GOSPA (α = 2) by its definition: the least cost over every partial one-to-one assignment, pairs charged
+    min(d, c)^p and each point left out c^p / 2."""
+    from itertools import permutations
+
+    m, n = len(X), len(Y)
+    best = np.inf
+    for perm in permutations(range(n + m), m):  # truth i -> estimate perm[i], or unassigned when perm[i] >= n
+        pairs = [(i, j) for i, j in enumerate(perm) if j < n]
+        cost = sum(min(np.linalg.norm(X[i] - Y[j]), c) ** p for i, j in pairs)
+        best = min(best, cost + c**p / 2 * (m + n - 2 * len(pairs)))
+    return best ** (1.0 / p)
+
+
+def test_gospa_is_the_least_cost_over_every_assignment():
+    rng = np.random.default_rng(11)
+    for trial in range(150):
+        m, n = int(rng.integers(0, 5)), int(rng.integers(0, 5))
+        X, Y = rng.uniform(0, 40, size=(m, 2)), rng.uniform(0, 40, size=(n, 2))
+        c, p = float(rng.choice([3.0, 10.0, 30.0])), float(rng.choice([1.0, 2.0]))
+        g = gospa(X, Y, c=c, p=p)
+        assert g.distance == pytest.approx(_gospa_by_enumeration(X, Y, c, p), rel=1e-12, abs=1e-12), trial
+        assert g.distance == pytest.approx((g.localisation + c**p / 2 * (g.missed + g.false)) ** (1 / p))
+        assert g.missed - g.false == m - n
+
 def test_team_metrics():
     est = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 3.0], [1.0, -3.0]])  # mean (1, 0)
     np.testing.assert_allclose(consensus_disagreement(est), [1.0, 1.0, 3.0, 3.0])

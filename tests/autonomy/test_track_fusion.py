@@ -74,3 +74,31 @@ def test_predicting_many_estimates_at_once_gives_each_ones_numbers_bit_for_bit()
         assert b.t == one.t and np.array_equal(b.p_W, one.p_W) and np.array_equal(b.v_W, one.v_W)
         assert (b.P is None and one.P is None) or np.array_equal(b.P, one.P)
     assert batch[-1] is ests[-1]
+
+
+def test_predicted_estimates_give_each_ones_numbers_and_arrays_without_making_every_estimate():
+    from autonomy.fusion.track_fusion import PredictedEstimates, predict_estimate
+    from interfaces.state import TargetEstimate
+
+    rng = np.random.default_rng(6)
+    ests = []
+    for k in range(12):
+        a = rng.normal(size=(4, 4))
+        ests.append(TargetEstimate(t=float(rng.uniform(0, 10)), p_W=rng.normal(size=2) * 100,
+                                   v_W=rng.normal(size=2) * 10, P=a @ a.T + np.eye(4)))
+    a = rng.normal(size=(6, 6))
+    ests.append(TargetEstimate(t=3.0, p_W=np.ones(3), v_W=np.ones(3), P=a @ a.T + np.eye(6)))  # 3-D: one at a time
+    ests.append(TargetEstimate(t=12.5, p_W=np.zeros(2), v_W=np.ones(2), P=np.eye(4)))  # already at t
+    pred = PredictedEstimates(ests, 12.5, 0.7)
+    assert len(pred._made) == 2  # only the two predicted one at a time are made up front
+    ones = [predict_estimate(e, 12.5, 0.7) for e in ests]
+    assert np.array_equal(pred.xy, np.array([o.p_W[:2] for o in ones]))
+    assert np.array_equal(pred.P_xy, np.array([o.P[:2, :2] for o in ones]))
+    for k in (4, -1, 0):
+        b, one = pred[k], ones[k]
+        assert b.t == one.t and np.array_equal(b.p_W, one.p_W) and np.array_equal(b.P, one.P)
+    assert pred[-1] is ests[-1] and pred[4] is pred[4]
+    with pytest.raises(IndexError):
+        pred[len(ests)]
+    with pytest.raises(ValueError, match="no covariance"):
+        PredictedEstimates([TargetEstimate(t=0.0, p_W=np.zeros(2), v_W=np.zeros(2))], 1.0, 0.7).P_xy

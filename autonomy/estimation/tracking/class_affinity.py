@@ -64,7 +64,9 @@ class ClassAffinity:
             if not sel.size:
                 continue
             L = np.stack([by_det[j] for j in cols[sel].tolist()])                    # (pairs, K)
-            predicted = np.stack([self._predicted(tracks[i], name, prior) for i in rows[sel].tolist()])
+            pair_rows = rows[sel].tolist()
+            by_track = {i: self._predicted(tracks[i], name, prior) for i in set(pair_rows)}  # once per track
+            predicted = np.stack([by_track[i] for i in pair_rows])
             num = np.einsum("pk,pk->p", predicted, L)
             den = L @ prior
             out[sel] += np.log(np.maximum(num, 1e-300)) - np.log(np.maximum(den, 1e-300))

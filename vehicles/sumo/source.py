@@ -156,6 +156,7 @@ class SumoTraffic:
         self._placed = np.full(n, -1, dtype=np.int64)  # tick each body was last placed at; -1: parked
         self._park_all()
         self._slots = SlotStates(n)
+        self._road_memo: dict[int, tuple[str, float, float, str, float, float]] = {}  # see road_positions
         self._events: list[dict] = []
         self._physics: list[str] = []  # SUMO ids of the physics cars' copies, by index in OtherCars
         self._physics_live: set[str] = set()  # those SUMO has now
@@ -342,18 +343,26 @@ class SumoTraffic:
         """(skytrack road id, arc length, lateral offset, stopped) per slot at ``tick``; road ``""`` when inactive.
 
         The road is the one SUMO has the vehicle on at the nearer step; inside a junction (SUMO's internal lanes)
-        it is the nearest road. Arc length and offset are the projection of the pose onto that road."""
+        it is the nearest road. Arc length and offset are the projection of the pose onto that road, kept per slot
+        while the slot's edge and position stay the same to the bit (vehicles waiting at junctions)."""
         ps = self.poses(tick)
         edges = self._slots.roads_at((tick - self._t_prev) / self.config.period)
         n = self.config.n_slots
         road_ids, s, lat = [""] * n, np.zeros(n), np.zeros(n)
-        for k in np.flatnonzero(ps.active):
+        memo = self._road_memo
+        for k in np.flatnonzero(ps.active).tolist():
+            x, y = float(ps.xy[k, 0]), float(ps.xy[k, 1])
+            kept = memo.get(k)
+            if kept is not None and kept[0] == edges[k] and kept[1] == x and kept[2] == y:
+                road_ids[k], s[k], lat[k] = kept[3], kept[4], kept[5]
+                continue
             rid = self.net.road_of(edges[k])
             if rid:
                 s[k], lat[k] = self.network.roads[rid].project(ps.xy[k])
             else:
                 rid, s[k], lat[k] = self.network.nearest(ps.xy[k])
             road_ids[k] = rid
+            memo[k] = (edges[k], x, y, rid, float(s[k]), float(lat[k]))
         return road_ids, s, lat, ps.active & (ps.speed < _STOPPED_SPEED)
 
     def pop_events(self) -> list[dict]:

@@ -85,7 +85,7 @@ _CORNERS: dict[tuple, tuple[object, object, tuple[np.ndarray, ...]]] = {}
 _JOINS_MAX = _CORNERS_MAX = 8192  # junctions kept (a city's worth; cleared whole when full, like _SAMPLES)
 
 
-def _corner(prev: RoadLike, road: RoadLike, end: tuple[np.ndarray, np.ndarray], start: tuple[np.ndarray, np.ndarray],
+def _corner(prev: RoadLike, road: RoadLike, end: tuple[np.ndarray, float], start: tuple[np.ndarray, float],
             cut_prev: float, cut: float, ds: float) -> tuple[np.ndarray, ...]:
     """(points, headings, curvatures, road arc lengths) of the inner samples of the junction corner from ``prev``'s
     cut end (point and heading ``end``) into ``road``'s cut start (``start``), kept by its exact inputs: a city's cars

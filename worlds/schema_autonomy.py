@@ -106,10 +106,10 @@ class TrackingSpec(Strict):
     merge_speed_mps: float = Field(2.0, gt=0, le=50, description="velocity difference under which close tracks "
                                                                  "merge, m/s")
     max_tracks: int = Field(500, ge=1, le=100000, description="most live tracks")
-    class_aided: bool = Field(True, description="a detection's class readings (colour, body type, length class) weigh in "
-                              "its association with the tracks, against each track's readings: where cars pass within "
-                              "the sensors' resolution a track keeps the car that looks like the one it has been "
-                              "reading; false: position alone")
+    class_aided: bool = Field(True, description="a detection's class readings (colour, body type, length class) "
+                              "weigh in its association with the tracks, against each track's readings: where cars "
+                              "pass within the sensors' resolution a track keeps the car that looks like the one it "
+                              "has been reading; false: position alone")
     min_target_probability: float = Field(0.2, gt=0, le=1, description="the most probable track is taken for the "
                                           "target when its probability reaches this (following the best candidate "
                                           "lets a pointed camera confirm or reject it)")

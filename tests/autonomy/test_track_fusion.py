@@ -82,7 +82,7 @@ def test_predicted_estimates_give_each_ones_numbers_and_arrays_without_making_ev
 
     rng = np.random.default_rng(6)
     ests = []
-    for k in range(12):
+    for _ in range(12):
         a = rng.normal(size=(4, 4))
         ests.append(TargetEstimate(t=float(rng.uniform(0, 10)), p_W=rng.normal(size=2) * 100,
                                    v_W=rng.normal(size=2) * 10, P=a @ a.T + np.eye(4)))
@@ -101,4 +101,4 @@ def test_predicted_estimates_give_each_ones_numbers_and_arrays_without_making_ev
     with pytest.raises(IndexError):
         pred[len(ests)]
     with pytest.raises(ValueError, match="no covariance"):
-        PredictedEstimates([TargetEstimate(t=0.0, p_W=np.zeros(2), v_W=np.zeros(2))], 1.0, 0.7).P_xy
+        _ = PredictedEstimates([TargetEstimate(t=0.0, p_W=np.zeros(2), v_W=np.zeros(2))], 1.0, 0.7).P_xy

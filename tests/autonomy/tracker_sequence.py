@@ -14,6 +14,7 @@ import hashlib
 import numpy as np
 
 from autonomy.estimation.scif import add_information
+from tests.numeric_record import summarise
 from autonomy.sensing.measurement import Detection
 from worlds.roads.network import RoadNetwork
 
@@ -94,7 +95,14 @@ def digest(tracker, seed: int, information: bool = False) -> str:
     velocity, covariance, the road it holds the car on) and of its counters at the end; with ``information``, the
     steps go through ``step_information`` and the local update of
     :class:`~autonomy.fusion.base_station.InformationReporter`."""
+    return record(tracker, seed, information)[0]
+
+
+def record(tracker, seed: int, information: bool = False) -> tuple[str, dict[str, list]]:
+    """:func:`digest` of what ``tracker`` makes of the sequence, and a summary of it for another machine
+    (:mod:`tests.numeric_record`): the estimates' numbers, which steps had one, the roads held and the counters."""
     h = hashlib.sha256()
+    rows, present, roads = [], [], []
     for t, dets in sequence(seed):
         if information:
             info = tracker.step_information(t, dets)
@@ -105,10 +113,19 @@ def digest(tracker, seed: int, information: bool = False) -> str:
             est = tracker.step(t, dets)
         if est is None:
             h.update(b"none")
+            present.append(0)
         else:
-            for a in (np.float64(est.t), est.p_W, est.v_W, est.P):
-                h.update(np.ascontiguousarray(a, dtype=float).tobytes())
-        h.update(repr((getattr(tracker, "road_id", None), getattr(tracker, "on_road", None))).encode())
-    h.update(repr((tracker.updates, tracker.initiations, tracker.gated_out, tracker.dropped_diverged,
-                   sorted(tracker.used_by_sensor.items()))).encode())
-    return h.hexdigest()[:20]
+            parts = [np.ascontiguousarray(a, dtype=float) for a in (np.float64(est.t), est.p_W, est.v_W, est.P)]
+            for a in parts:
+                h.update(a.tobytes())
+            rows.append(np.concatenate([a.ravel() for a in parts]))
+            present.append(1)
+        road = repr((getattr(tracker, "road_id", None), getattr(tracker, "on_road", None)))
+        h.update(road.encode())
+        roads.append(road)
+    counters = repr((tracker.updates, tracker.initiations, tracker.gated_out, tracker.dropped_diverged,
+                     sorted(tracker.used_by_sensor.items())))
+    h.update(counters.encode())
+    values = {"estimates": summarise(np.array(rows) if rows else np.zeros((0,))), "present": summarise(present),
+              "roads": summarise(np.array(roads)), "counters": ["text", counters]}
+    return h.hexdigest()[:20], values

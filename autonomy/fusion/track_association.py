@@ -4,7 +4,8 @@ Each UAV with a multi-target tracker shares a :class:`~interfaces.state.TrackPic
 target probabilities and the class evidence of its own sensors). At a fusion step, for each teammate's picture no
 older than ``max_age_s``:
 
-1. every track is predicted to the fusion time (constant velocity, :class:`~.track_fusion.PredictedEstimates`);
+1. every track is predicted to the fusion time (constant velocity, :class:`~.track_fusion.PredictedEstimates`), a
+   teammate's picture once for all its receivers (:func:`~.track_sets.track_set`);
 2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
    does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
@@ -35,9 +36,11 @@ from scipy.special import gammaincinv
 from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
+from .track_sets import TrackSet, associate_sets, track_set
 from .track_fusion import PredictedEstimates, fuse_estimates
 
-__all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "track_picture"]
+__all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "mahalanobis2",
+           "track_picture"]
 
 
 @dataclass(frozen=True)
@@ -81,21 +84,39 @@ def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstima
                                np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold)
 
 
+def mahalanobis2(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray) -> np.ndarray:
+    """``dᵀ (P_a + P_b)⁻¹ d`` with ``d = p_a − p_b`` over broadcast positions (..., 2) and covariances (..., 2, 2),
+    the 2×2 inverse in closed form (the same float operations whatever the broadcast)."""
+    d = pa - pb
+    S = Pa + Pb
+    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
+    return (S[..., 1, 1] * d[..., 0] ** 2 - 2 * S[..., 0, 1] * d[..., 0] * d[..., 1]
+            + S[..., 0, 0] * d[..., 1] ** 2) / np.maximum(det, 1e-300)
+
+
 def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray,
                         threshold: float) -> list[tuple[int, int]]:
     """:func:`associate_tracks` of positions ``pa`` (n, 2) and ``pb`` (m, 2) (m) with covariances ``Pa`` (n, 2, 2) and
     ``Pb`` (m, 2, 2) (m²)."""
     if len(pa) == 0 or len(pb) == 0:
         return []
-    d = pa[:, None, :] - pb[None, :, :]                      # (n, m, 2)
-    S = Pa[:, None] + Pb[None, :]                            # (n, m, 2, 2)
-    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
-    maha = (S[..., 1, 1] * d[..., 0] ** 2 - 2 * S[..., 0, 1] * d[..., 0] * d[..., 1]
-            + S[..., 0, 0] * d[..., 1] ** 2) / np.maximum(det, 1e-300)
-    big = threshold * 10.0 + 1.0
-    cost = np.where(maha <= threshold, maha, big)
-    rows, cols = linear_sum_assignment(cost)
-    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
+    maha = mahalanobis2(pa[:, None, :], Pa[:, None], pb[None, :, :], Pb[None, :])  # (n, m)
+    gated = maha <= threshold
+    # The assignment of least cost, with ``big`` for a pair outside the gate, is the matching of the gated pairs of
+    # greatest total ``big − d²`` (every partial matching extends to a full one with non-gated pairs), so it splits
+    # over the connected components of the gating graph. A component of one pair is that pair, a track in no gated
+    # pair is in none: the solver gets the rest (among traffic, the few cars near others), the same pairs.
+    deg_r, deg_c = gated.sum(axis=1), gated.sum(axis=0)
+    single = gated & (deg_r[:, None] == 1) & (deg_c[None, :] == 1)
+    pairs = [(int(i), int(j)) for i, j in zip(*np.nonzero(single), strict=True)]
+    rest_r = np.flatnonzero((deg_r > 0) & ~single.any(axis=1))
+    rest_c = np.flatnonzero((deg_c > 0) & ~single.any(axis=0))
+    if rest_r.size and rest_c.size:
+        big = threshold * 10.0 + 1.0
+        cost = np.where(gated[np.ix_(rest_r, rest_c)], maha[np.ix_(rest_r, rest_c)], big)
+        rows, cols = linear_sum_assignment(cost)
+        pairs += [(int(rest_r[i]), int(rest_c[j])) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
+    return sorted(pairs)
 
 
 class TeamTrackFusion:
@@ -134,9 +155,9 @@ class TeamTrackFusion:
         """The team's target at ``t`` (s) from one's own confirmed tracks ``own`` (``own_target`` the one taken for
         the target; ``local`` one's own target estimate) and the teammates' ``pictures`` (module docstring)."""
         mine = [r for r in own if r.confirmed and r.estimate.P is not None]
-        own_est = PredictedEstimates([r.estimate for r in mine], t, self.q)
-        own_xy, own_P = own_est.xy, own_est.P_xy
-        pooled = np.array([r.target_probability for r in mine], dtype=float)
+        own_set = TrackSet.of(mine, t, self.q)
+        own_est = own_set.est
+        pooled = own_set.p.copy()
         own_none = max(0.0, 1.0 - float(pooled.sum()))
         none = 0.0  # the members' pooled "in no track", one's own share added after the loop
         fused_parts: list[list[tuple[PredictedEstimates, int]]] = [[] for _ in mine]
@@ -147,9 +168,9 @@ class TeamTrackFusion:
                 continue
             members += 1
             none += max(0.0, 1.0 - sum(r.target_probability for r in pic.tracks))
-            theirs = [r for r in pic.tracks if r.estimate.P is not None]
-            their_est = PredictedEstimates([r.estimate for r in theirs], t, self.q)
-            pairs = associate_positions(own_xy, own_P, their_est.xy, their_est.P_xy, self.threshold)
+            their_set = track_set(pic, t, self.q)
+            theirs, their_est = their_set.reports, their_set.est
+            pairs = associate_sets(own_set, their_set, self.threshold)
             self.associated += len(pairs)
             taken = set()
             for i, j in pairs:

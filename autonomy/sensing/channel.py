@@ -29,7 +29,7 @@ from .messages import Envelope, Message
 from .scene import SceneQuery
 
 __all__ = ["Channel", "ChannelConfig", "ChannelStats", "LinkOutage", "RoutingTree", "chain_routes",
-           "minimum_spanning_tree_routes", "outage_holds", "scheduled_links"]
+           "minimum_spanning_tree_routes", "outage_holds", "scheduled_links", "scheduled_row"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -219,6 +219,16 @@ def scheduled_links(nodes: Sequence[str], links: Iterable[tuple[str, str]] | Non
     return up
 
 
+def scheduled_row(sender: str, targets: Sequence[str], links: Iterable[tuple[str, str]] | None,
+                  outages: Iterable[tuple[str, str, int, int]], tick: int) -> np.ndarray:
+    """(len(targets),) bool: row ``sender`` of :func:`scheduled_links` over ``(sender, *targets)``, without the
+    links among the targets (a direct send reads this row only; the whole matrix was N² outage checks per sender)."""
+    pairs = None if links is None else {frozenset(p) for p in links}
+    outages = tuple(outages)
+    return np.array([(pairs is None or frozenset((sender, r)) in pairs) and not outage_holds(sender, r, outages, tick)
+                     for r in targets], dtype=bool)
+
+
 def _points(nodes: Sequence[str], positions: Mapping[str, np.ndarray]) -> np.ndarray:
     """(N, 3) positions (m) of ``nodes``, in their order."""
     return np.array([np.asarray(positions[n], dtype=float) for n in nodes]).reshape(len(nodes), 3)
@@ -311,7 +321,9 @@ class Channel:
             )
             for o in config.outages
         ]
-        self._queue: list[Envelope] = []
+        self._queue: dict[str, list[Envelope]] = {}  # per receiver, in the order sent
+        self._rows_tick: int | None = None  # the tick of the delivery probabilities kept in _rows
+        self._rows: dict[tuple, np.ndarray] = {}
         self._counts: dict[tuple[str, str], list[int]] = {}
 
     def link_down(self, a: str, b: str, tick: int) -> bool:
@@ -366,7 +378,7 @@ class Channel:
             self._count(msg.sender, receiver, 2)
             return False
         t_tick = tick + self.latency_ticks * (len(path) - 1)
-        self._queue.append(
+        self._queue.setdefault(receiver, []).append(
             Envelope(message=msg, receiver=receiver, tick_arrival=t_tick, t_arrival=t_tick / self.tick_hz, path=path)
         )
         return True
@@ -384,12 +396,19 @@ class Channel:
                     tick: int) -> np.ndarray:
         """(len(targets),) delivery probabilities from ``sender`` to each target at ``tick``: the sender's row of
         :meth:`link_matrix`, without the links among the targets that a direct send does not use (with three UAVs
-        broadcasting, their line-of-sight rays were a third of those cast)."""
+        broadcasting, their line-of-sight rays were a third of those cast); kept for the tick, so a second message
+        between the same nodes at the same positions casts no ray."""
         nodes = (sender, *targets)
         pts = _points(nodes, positions)
-        P = self._pair_probabilities(np.repeat(pts[:1], len(targets), axis=0), pts[1:])
-        P[~scheduled_links(nodes, self.config.links, self._outages, tick)[0, 1:]] = 0.0
-        return P
+        key = (sender, tuple(targets), pts.tobytes())
+        if self._rows_tick != tick:
+            self._rows_tick, self._rows = tick, {}
+        P = self._rows.get(key)
+        if P is None:  # a UAV broadcasts its state and its estimate at one tick: the same links, rays cast once
+            P = self._pair_probabilities(np.repeat(pts[:1], len(targets), axis=0), pts[1:])
+            P[~scheduled_row(sender, targets, self.config.links, self._outages, tick)] = 0.0
+            self._rows[key] = P
+        return P.copy()
 
     def send_routed(self, msg: Message, tree: RoutingTree, tick: int) -> bool:
         """Send ``msg`` from its sender to the tree's root along the tree path (erasure per hop)."""
@@ -404,9 +423,10 @@ class Channel:
 
     def receive(self, node: str, tick: int) -> list[Envelope]:
         """Messages for ``node`` that have arrived by ``tick``, oldest first; they leave the channel."""
-        mine = [e for e in self._queue if e.receiver == node and e.tick_arrival <= tick]
+        queued = self._queue.get(node, [])
+        mine = [e for e in queued if e.tick_arrival <= tick]
         if mine:
-            self._queue = [e for e in self._queue if not (e.receiver == node and e.tick_arrival <= tick)]
+            self._queue[node] = [e for e in queued if e.tick_arrival > tick]
             for e in mine:
                 self._count(e.message.sender, node, 1)
         return sorted(mine, key=lambda e: e.tick_arrival)

@@ -14,6 +14,7 @@ from autonomy.sensing.channel import (
     minimum_spanning_tree_routes,
     outage_holds,
     scheduled_links,
+    scheduled_row,
 )
 from autonomy.sensing.fake_scene import FakeScene
 from autonomy.sensing.messages import EstimateMessage, InformationMessage, Message
@@ -186,6 +187,42 @@ def test_scheduled_links_are_the_topology_less_the_outages_and_the_radio_applies
         P = ch.link_matrix(nodes, pos, tick)
         off = ~np.eye(3, dtype=bool)
         assert ((P[off] > 0) == scheduled_links(nodes, ch.config.links, [("c", "a", 10, 20)], tick)[off]).all()
+
+
+def test_messages_between_the_same_nodes_at_one_tick_cast_their_rays_once():
+    class Counting(FakeScene):
+        rays = 0
+
+        def line_of_sight(self, a, b):
+            Counting.rays += len(a)
+            return super().line_of_sight(a, b)
+
+    scene = Counting([Building.cuboid((100.0, 0.0), (20.0, 20.0, 80.0))])
+    ch = Channel(ChannelConfig(), TICK_HZ, np.random.default_rng(0), scene=scene)
+    pos = {"a": np.array([0.0, 0.0, 50.0]), "b": np.array([200.0, 0.0, 50.0]), "c": np.array([100.0, 100.0, 50.0])}
+    ch.send(msg("a", None), pos, 3)
+    ch.send(msg("a", None), pos, 3)  # the state and the estimate of one step
+    assert Counting.rays == 2
+    got = ch.send(msg("a", None), pos, 3)
+    assert got["b"] is False  # behind the building, whichever message
+    ch.send(msg("a", None), pos, 4)  # the next tick
+    moved = {**pos, "c": np.array([100.0, 120.0, 50.0])}
+    ch.send(msg("a", None), moved, 4)  # another position
+    ch.send(msg("b", None), pos, 4)  # another sender
+    assert Counting.rays == 8
+
+
+def test_a_senders_scheduled_row_is_its_row_of_the_link_matrix():
+    rng = np.random.default_rng(4)
+    names = [f"u{k}" for k in range(7)]
+    for _ in range(50):
+        links = None if rng.random() < 0.3 else [tuple(rng.choice(names, 2, replace=False)) for _ in range(9)]
+        outages = [(*rng.choice(names, 2, replace=False), int(rng.integers(0, 10)), int(rng.integers(5, 20)))
+                   for _ in range(4)]
+        sender, *targets = rng.permutation(names).tolist()
+        tick = int(rng.integers(0, 20))
+        want = scheduled_links((sender, *targets), links, outages, tick)[0, 1:]
+        assert scheduled_row(sender, targets, links, outages, tick).tolist() == want.tolist()
 
 
 def test_the_fixed_chain_relays_through_the_node_before_whatever_the_links():

@@ -34,7 +34,7 @@ from .scan_gate import GatedCosts, ScanGating
 from .track import Track
 
 __all__ = ["GatedCosts", "ScanGating", "ScanAssignment", "GlobalNearestNeighbourAssociator", "gating_clusters",
-           "sensor_groups"]
+           "sensor_groups", "solve_component"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,8 +174,8 @@ class GlobalNearestNeighbourAssociator:
         take, hard = kernels.gnn_clusters(rows, cols, c, miss, order, starts, n_t, n_d, self.max_enumerated)
         chosen = [take]
         for h in hard:
-            chosen.append(_solve(*kernels.cluster_matrix(rows, cols, c, order, starts[h], starts[h + 1], n_t, n_d),
-                                 miss))
+            chosen.append(solve_component(*kernels.cluster_matrix(rows, cols, c, order, starts[h], starts[h + 1], n_t,
+                                                                  n_d), miss))
         picked = np.sort(np.concatenate(chosen))  # pair indices are row-major
         pairs = tuple(zip(rows[picked].tolist(), cols[picked].tolist(), strict=True))
         assigned = np.zeros(len(dets), dtype=bool)
@@ -189,7 +189,7 @@ class GlobalNearestNeighbourAssociator:
         return [self.assign(tracks, g) for g in sensor_groups(scan)]
 
 
-def _solve(C: np.ndarray, at: np.ndarray, tracks: np.ndarray, miss: np.ndarray) -> np.ndarray:
+def solve_component(C: np.ndarray, at: np.ndarray, tracks: np.ndarray, miss: np.ndarray) -> np.ndarray:
     """Pair indices of the optimal assignment of one component: its cost matrix ``C`` (``inf`` outside the gate,
     ``at`` the pair index of each entry, ``tracks`` the track of each row) beside one "no detection" column per
     track (module docstring)."""

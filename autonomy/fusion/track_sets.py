@@ -1,0 +1,126 @@
+"""Track pictures as arrays for the team's association: predicted once for all receivers, associated through a k-d tree.
+
+Team fusion among traffic (:mod:`.track_association`) predicts every track of every teammate's picture to the fusion
+time and associates it with one's own. The teammates of a broadcast receive the same picture and fuse at the same
+tick, so the prediction (:class:`~.track_fusion.PredictedEstimates`, the same numbers for every receiver) is made
+once and handed to each (:func:`track_set`): among 200 cars and 50 UAVs, predicting each picture 49 times was a third
+of the team's autonomy time. :func:`associate_sets` makes the pairs of
+:func:`~.track_association.associate_positions` from the pairs a k-d tree finds within the gate's reach (no pair
+farther apart than ``sqrt(χ² · (λ_a + λ_b))``, the λ the largest covariance eigenvalues of the two sets, is inside the
+gate) instead of the distance of every own track to every teammate track.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from interfaces.state import TrackPicture, TrackReport
+
+from .track_fusion import PredictedEstimates
+
+__all__ = ["TrackSet", "associate_sets", "track_set"]
+
+@dataclass(eq=False)
+class TrackSet:
+    """Tracks with a covariance predicted to one time, as arrays.
+
+    Attributes
+    ----------
+    reports : list[TrackReport]
+        The tracks, in the order of the arrays.
+    est : PredictedEstimates
+        Their predictions.
+    xy : np.ndarray
+        (n, 2) predicted positions (m).
+    P : np.ndarray
+        (n, 2, 2) their covariances (m²).
+    p : np.ndarray
+        (n,) target probabilities.
+    reach : float
+        Largest eigenvalue of any of ``P`` (m²), 0 for no track.
+    """
+
+    reports: list[TrackReport]
+    est: PredictedEstimates
+    xy: np.ndarray
+    P: np.ndarray
+    p: np.ndarray
+    reach: float = 0.0
+    _tree: cKDTree | None = field(default=None, repr=False)
+
+    def tree(self) -> cKDTree:
+        """k-d tree of :attr:`xy` (made once)."""
+        if self._tree is None:
+            self._tree = cKDTree(self.xy)
+        return self._tree
+
+    @classmethod
+    def of(cls, reports: Sequence[TrackReport], t: float, q: float) -> TrackSet:
+        """``reports`` (each with a covariance) predicted to ``t`` (s) with white-acceleration density ``q``
+        (m²/s³)."""
+        est = PredictedEstimates([r.estimate for r in reports], t, q)
+        P = est.P_xy
+        a, b, c = P[:, 0, 0], 0.5 * (P[:, 0, 1] + P[:, 1, 0]), P[:, 1, 1]
+        lam = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b * b)
+        return cls(reports=list(reports), est=est, xy=est.xy, P=P,
+                   p=np.array([r.target_probability for r in reports], dtype=float),
+                   reach=float(lam.max()) if lam.size else 0.0)
+
+
+_PREDICTED: dict[tuple[int, float], tuple[TrackPicture, TrackSet]] = {}
+"""The predictions of the current fusion time, per (picture, q); the picture is held, so its id is not reused."""
+_AT: list[float] = [float("nan")]
+
+
+def track_set(picture: TrackPicture, t: float, q: float) -> TrackSet:
+    """The tracks of ``picture`` that have a covariance, predicted to ``t`` (s) (:meth:`TrackSet.of`): made once per
+    picture and ``q`` for all the receivers that fuse at ``t``; those of an earlier time are let go."""
+    if t != _AT[0]:
+        _PREDICTED.clear()
+        _AT[0] = float(t)
+    key = (id(picture), float(q))
+    hit = _PREDICTED.get(key)
+    if hit is not None and hit[0] is picture:
+        return hit[1]
+    made = TrackSet.of([r for r in picture.tracks if r.estimate.P is not None], t, q)
+    _PREDICTED[key] = (picture, made)
+    return made
+
+
+def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int, int]]:
+    """:func:`~.track_association.associate_positions` of the tracks of ``a`` and ``b`` (the same pairs, sorted),
+    gating only the pairs a k-d tree finds within the gate's reach, and solving each connected component of the
+    gating graph alone (module docstring)."""
+    from autonomy.estimation.tracking import assignment_kernels as kernels
+    from autonomy.estimation.tracking.assignment import solve_component
+
+    from .track_association import mahalanobis2
+
+    n, m = len(a.xy), len(b.xy)
+    if not n or not m:
+        return []
+    radius = math.sqrt(threshold * (a.reach + b.reach)) * (1.0 + 1e-9) + 1e-9
+    near = a.tree().query_ball_tree(b.tree(), radius)
+    i = np.repeat(np.arange(n, dtype=np.int64), [len(js) for js in near])
+    j = np.fromiter((k for js in near for k in js), dtype=np.int64, count=int(i.size))
+    d2 = mahalanobis2(a.xy[i], a.P[i], b.xy[j], b.P[j])
+    keep = d2 <= threshold
+    rows, cols, cost = i[keep], j[keep], d2[keep]
+    if not rows.size:
+        return []
+    by = np.lexsort((cols, rows))  # row-major, as the assignment kernels take pairs
+    rows, cols, cost = rows[by], cols[by], cost[by]
+    # with the same cost ``big`` for every own track left alone, the least-cost assignment with misses is the
+    # assignment of least cost with ``big`` outside the gate: both make the gated matching of greatest Σ (big − d²)
+    miss = np.full(n, threshold * 10.0 + 1.0)
+    order, starts = kernels.pair_clusters(rows, cols, n)
+    take, hard = kernels.gnn_clusters(rows, cols, cost, miss, order, starts, n, m, 500)
+    chosen = [take] + [solve_component(*kernels.cluster_matrix(rows, cols, cost, order, starts[h], starts[h + 1], n,
+                                                               m), miss) for h in hard]
+    picked = np.concatenate(chosen).astype(np.int64) if chosen else np.zeros(0, np.int64)
+    return sorted(zip(rows[picked].tolist(), cols[picked].tolist(), strict=True))

@@ -9,7 +9,7 @@ older than ``max_age_s``:
 2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
    does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
-   pairs are one car;
+   pairs are one car (through k-d trees, each cluster of nearby cars alone: :func:`~.track_sets.associate_sets`);
 3. the team's belief of which car is the target is the linear opinion pool of the members' beliefs: one's own
    track k has team probability ``(p_k + Σ_j p_j) / n``, its own target probability plus those of the teammates'
    tracks assigned to it, over the ``n`` UAVs whose pictures are in (oneself included). A car only a teammate holds
@@ -36,11 +36,10 @@ from scipy.special import gammaincinv
 from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
-from .track_sets import TrackSet, associate_sets, track_set
 from .track_fusion import PredictedEstimates, fuse_estimates
+from .track_sets import TrackSet, associate_sets, mahalanobis2, track_set
 
-__all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "mahalanobis2",
-           "track_picture"]
+__all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "track_picture"]
 
 
 @dataclass(frozen=True)
@@ -84,16 +83,6 @@ def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstima
                                np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold)
 
 
-def mahalanobis2(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray) -> np.ndarray:
-    """``dᵀ (P_a + P_b)⁻¹ d`` with ``d = p_a − p_b`` over broadcast positions (..., 2) and covariances (..., 2, 2),
-    the 2×2 inverse in closed form (the same float operations whatever the broadcast)."""
-    d = pa - pb
-    S = Pa + Pb
-    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
-    return (S[..., 1, 1] * d[..., 0] ** 2 - 2 * S[..., 0, 1] * d[..., 0] * d[..., 1]
-            + S[..., 0, 0] * d[..., 1] ** 2) / np.maximum(det, 1e-300)
-
-
 def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray,
                         threshold: float) -> list[tuple[int, int]]:
     """:func:`associate_tracks` of positions ``pa`` (n, 2) and ``pb`` (m, 2) (m) with covariances ``Pa`` (n, 2, 2) and
@@ -101,22 +90,10 @@ def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.n
     if len(pa) == 0 or len(pb) == 0:
         return []
     maha = mahalanobis2(pa[:, None, :], Pa[:, None], pb[None, :, :], Pb[None, :])  # (n, m)
-    gated = maha <= threshold
-    # The assignment of least cost, with ``big`` for a pair outside the gate, is the matching of the gated pairs of
-    # greatest total ``big − d²`` (every partial matching extends to a full one with non-gated pairs), so it splits
-    # over the connected components of the gating graph. A component of one pair is that pair, a track in no gated
-    # pair is in none: the solver gets the rest (among traffic, the few cars near others), the same pairs.
-    deg_r, deg_c = gated.sum(axis=1), gated.sum(axis=0)
-    single = gated & (deg_r[:, None] == 1) & (deg_c[None, :] == 1)
-    pairs = [(int(i), int(j)) for i, j in zip(*np.nonzero(single), strict=True)]
-    rest_r = np.flatnonzero((deg_r > 0) & ~single.any(axis=1))
-    rest_c = np.flatnonzero((deg_c > 0) & ~single.any(axis=0))
-    if rest_r.size and rest_c.size:
-        big = threshold * 10.0 + 1.0
-        cost = np.where(gated[np.ix_(rest_r, rest_c)], maha[np.ix_(rest_r, rest_c)], big)
-        rows, cols = linear_sum_assignment(cost)
-        pairs += [(int(rest_r[i]), int(rest_c[j])) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
-    return sorted(pairs)
+    big = threshold * 10.0 + 1.0
+    cost = np.where(maha <= threshold, maha, big)
+    rows, cols = linear_sum_assignment(cost)
+    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
 
 
 class TeamTrackFusion:

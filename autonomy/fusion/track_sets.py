@@ -7,23 +7,40 @@ once and handed to each (:func:`track_set`): among 200 cars and 50 UAVs, predict
 of the team's autonomy time. :func:`associate_sets` makes the pairs of
 :func:`~.track_association.associate_positions` from the pairs a k-d tree finds within the gate's reach (no pair
 farther apart than ``sqrt(χ² · (λ_a + λ_b))``, the λ the largest covariance eigenvalues of the two sets, is inside the
-gate) instead of the distance of every own track to every teammate track.
+gate) instead of the distance of every own track to every teammate track, and solves each connected component of the
+gating graph alone with the tracker's compiled GNN kernels: with a cost ``big`` for a pair outside the gate, the
+dense assignment's cost is ``big · min(n, m) + Σ (d² − big)`` over the gated pairs it makes (every partial matching
+extends to a full one with non-gated pairs), and with the same miss cost ``big`` for every track the least-cost
+assignment with misses makes the same matching of greatest ``Σ (big − d²)``, which splits over the components.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from autonomy.estimation.tracking import assignment_kernels as kernels
+from autonomy.estimation.tracking.assignment import solve_component
 from interfaces.state import TrackPicture, TrackReport
 
 from .track_fusion import PredictedEstimates
 
-__all__ = ["TrackSet", "associate_sets", "track_set"]
+__all__ = ["TrackSet", "associate_sets", "mahalanobis2", "track_set"]
+
+
+def mahalanobis2(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray) -> np.ndarray:
+    """``dᵀ (P_a + P_b)⁻¹ d`` with ``d = p_a − p_b`` over broadcast positions (..., 2) and covariances (..., 2, 2),
+    the 2×2 inverse in closed form (the same float operations whatever the broadcast)."""
+    d = pa - pb
+    S = Pa + Pb
+    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
+    return (S[..., 1, 1] * d[..., 0] ** 2 - 2 * S[..., 0, 1] * d[..., 0] * d[..., 1]
+            + S[..., 0, 0] * d[..., 1] ** 2) / np.maximum(det, 1e-300)
+
 
 @dataclass(eq=False)
 class TrackSet:
@@ -96,11 +113,6 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     """:func:`~.track_association.associate_positions` of the tracks of ``a`` and ``b`` (the same pairs, sorted),
     gating only the pairs a k-d tree finds within the gate's reach, and solving each connected component of the
     gating graph alone (module docstring)."""
-    from autonomy.estimation.tracking import assignment_kernels as kernels
-    from autonomy.estimation.tracking.assignment import solve_component
-
-    from .track_association import mahalanobis2
-
     n, m = len(a.xy), len(b.xy)
     if not n or not m:
         return []
@@ -122,5 +134,5 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     take, hard = kernels.gnn_clusters(rows, cols, cost, miss, order, starts, n, m, 500)
     chosen = [take] + [solve_component(*kernels.cluster_matrix(rows, cols, cost, order, starts[h], starts[h + 1], n,
                                                                m), miss) for h in hard]
-    picked = np.concatenate(chosen).astype(np.int64) if chosen else np.zeros(0, np.int64)
+    picked = np.concatenate(chosen).astype(np.int64)
     return sorted(zip(rows[picked].tolist(), cols[picked].tolist(), strict=True))

@@ -1,6 +1,5 @@
-"""A teammate's picture is predicted once for all its receivers, the team's association through a k-d tree
-(autonomy/fusion/track_sets.py) and solved on the gated components of more than one pair
-(autonomy/fusion/track_association.py) makes the pairs of the whole assignment."""
+"""A teammate's picture is predicted once for all its receivers, and the team's association through k-d trees and
+per-component solves makes the pairs of the whole assignment (autonomy/fusion/track_sets.py)."""
 
 from __future__ import annotations
 
@@ -24,27 +23,6 @@ def _whole_assignment(pa, Pa, pb, Pb, threshold):
     return sorted((int(i), int(j)) for i, j in zip(r, c, strict=True) if cost[i, j] <= threshold)
 
 
-def test_the_split_assignment_makes_the_whole_assignments_pairs():
-    rng = np.random.default_rng(0)
-    compared = multi = 0
-    for _ in range(1500):
-        n, m = rng.integers(1, 50, 2)
-        extent = rng.choice([30.0, 200.0, 1000.0])  # crowded to sparse
-        cars = rng.uniform(-extent, extent, (max(n, m) + 5, 2))
-        pa = cars[rng.choice(len(cars), n, replace=False)] + rng.normal(0, 3, (n, 2))
-        pb = cars[rng.choice(len(cars), m, replace=False)] + rng.normal(0, 3, (m, 2))
-        var = rng.choice([4.0, 25.0, 100.0])
-        Pa = np.eye(2) * var * rng.uniform(0.5, 1.5, (n, 1, 1))
-        Pb = np.eye(2) * var * rng.uniform(0.5, 1.5, (m, 1, 1))
-        want = _whole_assignment(pa, Pa, pb, Pb, CHI2_2_999)
-        assert associate_positions(pa, Pa, pb, Pb, CHI2_2_999) == want
-        compared += len(want)
-        gated = np.einsum("nmi,nmij,nmj->nm", pa[:, None] - pb[None], np.linalg.inv(Pa[:, None] + Pb[None]),
-                          pa[:, None] - pb[None]) <= CHI2_2_999
-        multi += bool((gated.sum(axis=1) > 1).any())
-    assert compared > 10_000 and multi > 300  # many pairs, and many scenes where the solver had to choose
-
-
 def _set(rng, xy, var) -> TrackSet:
     reps = []
     for k, (x, y) in enumerate(xy):
@@ -56,19 +34,23 @@ def _set(rng, xy, var) -> TrackSet:
     return TrackSet.of(reps, 10.0, 1.0)
 
 
-def test_the_tree_gated_association_makes_the_pairs_of_the_dense_one():
+def test_the_tree_gated_association_makes_the_pairs_of_the_whole_assignment():
     rng = np.random.default_rng(1)
-    compared = 0
-    for _ in range(600):
+    compared = multi = 0
+    for _ in range(1200):
         n, m = rng.integers(1, 80, 2)
-        extent, var = rng.choice([30.0, 200.0, 1000.0]), rng.choice([4.0, 25.0, 400.0])
+        extent, var = rng.choice([30.0, 200.0, 1000.0]), rng.choice([4.0, 25.0, 400.0])  # crowded to sparse
         cars = rng.uniform(-extent, extent, (max(n, m) + 5, 2))
         a = _set(rng, cars[rng.choice(len(cars), n, replace=False)] + rng.normal(0, 3, (n, 2)), var)
         b = _set(rng, cars[rng.choice(len(cars), m, replace=False)] + rng.normal(0, 3, (m, 2)), var)
-        want = associate_positions(a.xy, a.P, b.xy, b.P, CHI2_2_999)
+        want = _whole_assignment(a.xy, a.P, b.xy, b.P, CHI2_2_999)
         assert associate_sets(a, b, CHI2_2_999) == want
+        assert sorted(associate_positions(a.xy, a.P, b.xy, b.P, CHI2_2_999)) == want
         compared += len(want)
-    assert compared > 5000
+        d = a.xy[:, None] - b.xy[None]
+        gated = np.einsum("nmi,nmij,nmj->nm", d, np.linalg.inv(a.P[:, None] + b.P[None]), d) <= CHI2_2_999
+        multi += bool((gated.sum(axis=1) > 1).any())
+    assert compared > 10_000 and multi > 300  # many pairs, and many scenes where a component held a choice
 
 
 def _picture(rng, n=30):

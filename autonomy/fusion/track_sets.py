@@ -117,9 +117,8 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     if not n or not m:
         return []
     radius = math.sqrt(threshold * (a.reach + b.reach)) * (1.0 + 1e-9) + 1e-9
-    near = a.tree().query_ball_tree(b.tree(), radius)
-    i = np.repeat(np.arange(n, dtype=np.int64), [len(js) for js in near])
-    j = np.fromiter((k for js in near for k in js), dtype=np.int64, count=int(i.size))
+    near = a.tree().sparse_distance_matrix(b.tree(), radius, output_type="ndarray")
+    i, j = near["i"].astype(np.int64), near["j"].astype(np.int64)
     d2 = mahalanobis2(a.xy[i], a.P[i], b.xy[j], b.P[j])
     keep = d2 <= threshold
     rows, cols, cost = i[keep], j[keep], d2[keep]

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RTOL", "close", "differences", "flatten", "machine_key", "summarise"]
+__all__ = ["RTOL", "close", "column_digest", "differences", "flatten", "machine_key", "summarise"]
 
 RTOL = 1e-6
 """Relative tolerance of a summary on another machine: ``|a − b| <= RTOL · (1 + |a|)`` per entry."""
@@ -56,12 +56,18 @@ def machine_key() -> str:
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
+def column_digest(values: Any) -> str:
+    """SHA-256 (20 hex digits) of an array's dtype, shape and bytes."""
+    a = np.ascontiguousarray(values)
+    return hashlib.sha256(str(a.dtype).encode() + str(a.shape).encode() + a.tobytes()).hexdigest()[:20]
+
+
 def summarise(values: Any) -> list:
     """A column's summary: for numbers ``[size, nan count, Σx, Σ|x|, min, max, x at SAMPLES evenly spaced
     indices]`` (NaNs left out of the sums and extremes); for anything else ``["digest", sha256 of its bytes]``."""
     a = np.ascontiguousarray(values)
     if a.dtype.kind not in "biuf":
-        return ["digest", hashlib.sha256(str(a.dtype).encode() + str(a.shape).encode() + a.tobytes()).hexdigest()[:20]]
+        return ["digest", column_digest(a)]
     x = a.astype(float).ravel()
     finite = x[~np.isnan(x)]
     head = [float(x.size), float(x.size - finite.size)]

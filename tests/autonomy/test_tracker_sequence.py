@@ -21,7 +21,7 @@ import pytest
 from autonomy.estimation.road.config import RoadFilterConfig
 from autonomy.estimation.road.tracker import RoadConstrainedTracker, RoadTrackerConfig
 from autonomy.estimation.tracker import SingleTargetTracker, TrackerConfig
-from tests.autonomy.tracker_sequence import record, road_network
+from tests.autonomy.tracker_sequence import digest, record, road_network
 from tests.numeric_record import differences
 
 VALUES_FILE = Path(__file__).with_name("tracker_sequence_values.json")
@@ -80,6 +80,14 @@ def test_tracker_reproduces_the_recorded_sequence(case, seed):
 @pytest.mark.parametrize("variant", ["maekf", "ecukf"])
 def test_road_tracker_reproduces_the_recorded_sequence(variant, seed):
     _check(f"road_{variant}", seed)
+
+
+def test_the_sequence_exercises_loss_divergence_and_every_sensor():
+    tracker = SingleTargetTracker(TrackerConfig())
+    digest(tracker, 0)
+    assert tracker.initiations == 3 and tracker.dropped_diverged == 1  # started, lost in the gap, diverged at 36 s
+    assert set(tracker.used_by_sensor) == {"uav1/camera", "uav2/bearing", "uav1/radar", "uav2/radar", "uav3/box"}
+    assert tracker.gated_out > 0
 
 
 def main() -> int:

@@ -14,8 +14,8 @@ import hashlib
 import numpy as np
 
 from autonomy.estimation.scif import add_information
-from tests.numeric_record import summarise
 from autonomy.sensing.measurement import Detection
+from tests.numeric_record import summarise
 from worlds.roads.network import RoadNetwork
 
 SCAN_DT = 0.5  # s

@@ -21,11 +21,13 @@ import json
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 
-from tests.numeric_record import differences, flatten, machine_key, summarise
+from tests.numeric_record import column_digest, differences, flatten, machine_key, summarise
+
+if TYPE_CHECKING:
+    from simulator.runrecord import RunRecord
 
 GOLDEN_FILE = Path(__file__).with_name("golden_records.json")
 BITS_ONLY = ("helsinki_chase",)
@@ -65,17 +67,11 @@ def _digest_bytes(*chunks: bytes) -> str:
     return h.hexdigest()[:20]
 
 
-def record_digest(out_dir: Path) -> dict[str, str]:
-    """One digest per stream column, one for the events and one for the metrics (machine-time keys left out), and
-    one for the search sets where the run has them."""
-    from simulator.runrecord import load_run
-
-    rec = load_run(out_dir)
-    out: dict[str, str] = {}
-    for name, cols in sorted(rec.streams.items()):
-        for col, values in sorted(cols.items()):
-            a = np.ascontiguousarray(values)
-            out[f"{name}.{col}"] = _digest_bytes(str(a.dtype).encode(), str(a.shape).encode(), a.tobytes())
+def record_digest(rec: RunRecord, out_dir: Path) -> dict[str, str]:
+    """One digest per stream column of the run record ``rec``, one for the events and one for the metrics
+    (machine-time keys left out), and one for the search sets where the run in ``out_dir`` has them."""
+    out = {f"{name}.{col}": column_digest(values) for name, cols in sorted(rec.streams.items())
+           for col, values in sorted(cols.items())}
     out["events"] = _digest_bytes(json.dumps(_scrub(rec.events), sort_keys=True).encode())
     out["metrics"] = _digest_bytes(json.dumps(_scrub(rec.metrics), sort_keys=True).encode())
     sets = Path(out_dir) / "search_sets.jsonl.gz"
@@ -84,12 +80,9 @@ def record_digest(out_dir: Path) -> dict[str, str]:
     return out
 
 
-def record_values(out_dir: Path) -> dict[str, Any]:
-    """The summary of every stream column, and the events and metrics flattened (machine-time keys left out), for
-    the check on another machine (:mod:`tests.numeric_record`)."""
-    from simulator.runrecord import load_run
-
-    rec = load_run(out_dir)
+def record_values(rec: RunRecord) -> dict[str, Any]:
+    """The summary of every stream column of the run record ``rec``, and its events and metrics flattened
+    (machine-time keys left out), for the check on another machine (:mod:`tests.numeric_record`)."""
     return {"streams": {f"{name}.{col}": summarise(values) for name, cols in sorted(rec.streams.items())
                         for col, values in sorted(cols.items())},
             "events": flatten(_scrub(rec.events)), "metrics": flatten(_scrub(rec.metrics))}
@@ -98,11 +91,13 @@ def record_values(out_dir: Path) -> dict[str, Any]:
 def run_case(name: str, seed: int, out_dir: Path) -> tuple[dict[str, str], dict[str, Any]]:
     """Digests and summaries (:func:`record_digest`, :func:`record_values`) of a short run of world ``name``."""
     from simulator.api import run
+    from simulator.runrecord import load_run
 
     res = run(name, duration=DURATION_S, seed=seed, out_dir=out_dir)
     if res.status != "completed":
         raise RuntimeError(f"{name} seed {seed}: {res.status} ({res.error})")
-    return record_digest(out_dir), record_values(out_dir)
+    rec = load_run(out_dir)
+    return record_digest(rec, out_dir), record_values(rec)
 
 
 def load_golden() -> dict[str, Any]:

@@ -266,9 +266,10 @@ SHARED_MEASUREMENT_ESTIMATORS = ("ekf", "ukf", "ckf", "imm")
 
 
 def _formation_imm_issues(world: World) -> list[WorldIssue]:
-    """Paper 003's pieces: the ``imm`` estimator (model ``cv``; its ``imm`` settings only with it; bearings alone
-    cannot start its track without the teammates' bearings), ``measurements`` fusion (a tracker that stacks them), and
-    ``formation`` guidance (a team of every UAV, one range per UAV, a bearing σ to weigh the geometry with)."""
+    """Paper 003's pieces: the ``imm`` estimator (model ``cv`` with its ``cv_ct`` modes; its ``imm`` settings only with
+    it; bearings alone cannot start its track without the teammates' bearings), ``measurements`` fusion (a tracker
+    that stacks them), and ``formation`` guidance (a team of every UAV, one range per UAV, a bearing σ to weigh the
+    geometry with)."""
     issues: list[WorldIssue] = []
     n = len(world.uavs)
     for i, uav in enumerate(world.uavs):
@@ -277,9 +278,10 @@ def _formation_imm_issues(world: World) -> list[WorldIssue]:
         if est.imm is not None and est.type != "imm":
             issues.append(WorldIssue(f"{where}.estimator.imm", est.imm.model_dump(),
                                      f"no 'imm' settings unless the type is imm (type is {est.type!r})"))
-        if est.type == "imm" and est.model != "cv":
+        if est.type == "imm" and (est.imm is None or est.imm.modes == "cv_ct") and est.model != "cv":
             issues.append(WorldIssue(f"{where}.estimator.model", est.model,
-                                     "'cv': the imm's modes (CV and coordinated turns) share the CV state layout"))
+                                     "'cv': the cv_ct imm's modes (CV and coordinated turns) share the CV state "
+                                     "layout (imm: {modes: move_stop} runs on cv or singer)"))
         bearing_only = bool(uav.sensors) and all(s.type in ("bearing", "camera") for s in uav.sensors)
         if est.type == "imm" and bearing_only and fusion.method != "measurements":
             issues.append(WorldIssue(f"{where}.fusion.method", fusion.method,

@@ -60,13 +60,21 @@ def _typed(model: type[BaseModel] | None, value: dict[str, Any]) -> BaseModel | 
 
 
 class ImmSpec(Strict):
-    """Paper 003's IMM (``autonomy.estimation.imm.cv_ct_imm``): EKFs on CV and on coordinated turns at ±ω; the CV
-    mode's white-acceleration density is the tracker's ``params.q``. Each setting ``x`` feeds the tracker's
-    ``imm_x`` (``TrackerConfig``; ``turn_rate_deg_s`` in rad/s)."""
+    """The IMM's modes: paper 003's (``cv_ct``, ``autonomy.estimation.imm.cv_ct_imm``: EKFs on CV and on coordinated
+    turns at ±ω; the CV mode's white-acceleration density is the tracker's ``params.q``; model ``cv``), or a car that
+    moves and stops (``move_stop``, ``autonomy.estimation.imm.move_stop_imm``: EKFs on the estimator's ``model`` and
+    on a stopped car, switching with the mean times below). Each setting ``x`` feeds the tracker's ``imm_x``
+    (``TrackerConfig``; ``turn_rate_deg_s`` in rad/s)."""
 
-    turn_rate_deg_s: PositiveFloat = Field(math.degrees(0.3), description="ω of the two turn modes, deg/s (0.3 rad/s)")
-    q_turn: PositiveFloat = Field(0.05, description="white-acceleration density of the turn modes, m^2/s^3")
-    p_stay: float = Field(0.95, gt=0, lt=1, description="diagonal of the mode-transition matrix")
+    modes: Literal["cv_ct", "move_stop"] = Field("cv_ct", description="the mode set")
+    turn_rate_deg_s: PositiveFloat = Field(math.degrees(0.3), description="cv_ct: ω of the two turn modes, deg/s "
+                                                                          "(0.3 rad/s)")
+    q_turn: PositiveFloat = Field(0.05, description="cv_ct: white-acceleration density of the turn modes, m^2/s^3")
+    p_stay: float = Field(0.95, gt=0, lt=1, description="cv_ct: diagonal of the mode-transition matrix")
+    mean_moving_s: PositiveFloat = Field(30.0, description="move_stop: mean time a car drives before it stops, s")
+    mean_stopped_s: PositiveFloat = Field(10.0, description="move_stop: mean time a stopped car stays stopped, s")
+    stopped_q: NonNegFloat = Field(0.01, description="move_stop: position random-walk density of a stopped car, "
+                                                    "m^2/s")
 
 
 class SetMembershipSpec(Strict):
@@ -141,11 +149,11 @@ class TrackingSpec(Strict):
 
 
 class EstimatorSpec(Strict):
-    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or paper
-    003's ``imm`` (CV + CT ±ω EKFs; model ``cv``), a road-constrained tracker (paper 002: ``maekf``
-    pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on the world's road map, with junction hypotheses and
-    an unconstrained fallback off the map), paper 004's ``set_membership`` estimator (sets that hold every target,
-    from a bounded-error ``box`` sensor; settings in ``set_membership``), or a user plugin."""
+    """The UAV's target estimator: a single-target tracker with an ``ekf``/``ukf``/``ckf``/``scif`` filter or an ``imm``
+    (paper 003's CV + CT ±ω EKFs on model ``cv``, or move–stop EKFs; the ``imm`` block), a road-constrained tracker
+    (paper 002: ``maekf`` pseudo-measurement EKF or ``ecukf`` two-stage constrained UKF on the world's road map, with
+    junction hypotheses and an unconstrained fallback off the map), paper 004's ``set_membership`` estimator (sets
+    that hold every target, from a bounded-error ``box`` sensor; settings in ``set_membership``), or a user plugin."""
 
     type: str = Field("ekf", description="the estimator type: a tag of worlds.variants.ESTIMATORS")
     model: Literal["cv", "singer"] = "cv"

@@ -27,8 +27,9 @@ import numpy as np
 
 from autonomy.estimation.base import TIME_TOLERANCE, Filter, GaussianFilter, Innovation
 from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, measurement_model
+from autonomy.estimation.models import LinearMotionModel
 
-__all__ = ["IMM", "cv_ct_imm", "switching_matrix"]
+__all__ = ["IMM", "MoveStopSwitching", "cv_ct_imm", "move_stop_imm", "switching_matrix"]
 
 
 class IMM(Filter):
@@ -230,3 +231,46 @@ def cv_ct_imm(x0: np.ndarray, P0: np.ndarray, t0: float, *, q_cv: float, q_ct: f
               CoordinatedTurn(omega=-turn_rate, q=q_ct)]
     filters = [make_filter(kind, m, x0, P0, t0, target_height=target_height) for m in models]
     return IMM(filters, switching_matrix(len(models), p_stay))
+
+
+class MoveStopSwitching:
+    """Mode-transition matrix ``Π(dt)`` of a car that drives for ``mean_moving_s`` on average before it stops and
+    stays stopped ``mean_stopped_s`` on average: the two-state continuous-time Markov chain with rates
+    ``a = 1/mean_moving_s`` (move → stop) and ``b = 1/mean_stopped_s`` (stop → move), exactly,
+    ``Π(dt) = [[1 − a·e, a·e], [b·e, 1 − b·e]]`` with ``e = (1 − exp(−(a + b) dt)) / (a + b)``; mode 0 moves, mode
+    1 is stopped. ``Π(s) Π(t) = Π(s + t)``: the switching does not depend on how often the sensors report."""
+
+    def __init__(self, mean_moving_s: float, mean_stopped_s: float) -> None:
+        for name, value in (("mean_moving_s", mean_moving_s), ("mean_stopped_s", mean_stopped_s)):
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"MoveStopSwitching.{name} must be finite and > 0 s, got {value!r}")
+        self.a = 1.0 / float(mean_moving_s)
+        self.b = 1.0 / float(mean_stopped_s)
+
+    @property
+    def stationary(self) -> np.ndarray:
+        """The long-run share of time in each mode, ``(b, a) / (a + b)``."""
+        return np.array([self.b, self.a]) / (self.a + self.b)
+
+    def __call__(self, dt: float) -> np.ndarray:
+        rate = self.a + self.b
+        e = -math.expm1(-rate * max(float(dt), 0.0)) / rate
+        return np.array([[1.0 - self.a * e, self.a * e], [self.b * e, 1.0 - self.b * e]])
+
+
+def move_stop_imm(x0: np.ndarray, P0: np.ndarray, t0: float, *, moving: LinearMotionModel, mean_moving_s: float,
+                  mean_stopped_s: float, stopped_q: float, kind: str = "ekf", target_height: float = 0.0,
+                  **filter_kwargs: object) -> IMM:
+    """An IMM of a car that moves and stops: a filter of type ``kind`` on ``moving`` (CV or Singer) and one on the
+    :class:`~autonomy.estimation.models.Stopped` model of its layout (position random-walk density ``stopped_q``,
+    m²/s), switching as :class:`MoveStopSwitching` says, from ``(x0, P0)`` at ``t0`` (s), the modes weighted by the
+    chain's long-run shares. A stopped car's detections then average into its position instead of feeding a
+    velocity of noise (the moving model alone lets a radar-only track of a stopped car wander by the radar's
+    cross-range error). ``filter_kwargs`` go to each mode's filter (e.g. an EKF's ``iterations``)."""
+    from autonomy.estimation.factory import make_filter
+    from autonomy.estimation.models import Stopped
+
+    switching = MoveStopSwitching(mean_moving_s, mean_stopped_s)
+    models = [moving, Stopped(layout_of=moving.layout, q=stopped_q)]
+    filters = [make_filter(kind, m, x0, P0, t0, target_height=target_height, **filter_kwargs) for m in models]
+    return IMM(filters, switching, mu0=switching.stationary)

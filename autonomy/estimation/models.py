@@ -1,4 +1,5 @@
-"""Target motion models: constant velocity (CV), constant acceleration (CA), coordinated turn (CT) and Singer.
+"""Target motion models: constant velocity (CV), constant acceleration (CA), coordinated turn (CT), Singer, and a
+stopped target on any of their layouts (the stop mode of a move–stop IMM).
 
 Every model names its state layout once. Linear models are axis-major blocks, following the papers'
 ``[x, ẋ, ẍ, y, ẏ, ÿ]`` ordering: the full transition is ``F = I_dim ⊗ F_axis`` and ``Q = I_dim ⊗ Q_axis``.
@@ -21,7 +22,7 @@ from scipy.linalg import expm
 __all__ = [
     "CV_2D", "CV_3D", "CA_2D", "CA_3D", "SINGER", "SINGER_3D", "CT_2D", "CT_OMEGA_2D",
     "MotionModel", "LinearMotionModel", "ConstantVelocity", "ConstantAcceleration", "Singer",
-    "CoordinatedTurn", "CoordinatedTurnEstimated", "van_loan",
+    "CoordinatedTurn", "CoordinatedTurnEstimated", "Stopped", "van_loan",
 ]
 
 CV_2D = ("x", "vx", "y", "vy")
@@ -245,6 +246,38 @@ class Singer(LinearMotionModel):
             F1 = np.eye(3) + dt * F0
             Q1 = np.diag([0.0, 0.0, dt**2 * self.sigma_a**2])
         return _per_axis(F1, Q1, self.dim)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Stopped(LinearMotionModel):
+    """A stopped target on the layout of a moving model (CV, CA or Singer): the stop mode of a move–stop IMM
+    (Kirubarajan & Bar-Shalom's move–stop–move targets). The position is held, up to a random walk of density
+    ``q`` (m²/s: a car creeping in a queue, the road's roughness); every derivative is zero, with a small residual
+    variance ``sigma_rate²`` (velocity in (m/s)², acceleration in (m/s²)²) that keeps the covariance positive
+    definite. Per axis ``F = diag(1, 0[, 0])``, ``Q = diag(q T, σ², [σ²])``.
+    """
+
+    layout_of: tuple[str, ...] = field(metadata={"doc": "the moving model's layout, axis-major (CV, CA or Singer)"})
+    q: float = field(default=0.01, metadata={"doc": "position random-walk density, m²/s"})
+    sigma_rate: float = field(default=0.05, metadata={"doc": "residual standard deviation of each derivative"})
+
+    def __post_init__(self) -> None:
+        if tuple(self.layout_of) not in (CV_2D, CV_3D, CA_2D, CA_3D):
+            raise ValueError(f"Stopped.layout_of must be a CV or CA/Singer layout, got {self.layout_of!r}")
+        _check_nonneg("q", self.q)
+        if not (np.isfinite(self.sigma_rate) and self.sigma_rate > 0):
+            raise ValueError(f"sigma_rate must be finite and > 0, got {self.sigma_rate!r}")
+
+    @property
+    def layout(self) -> tuple[str, ...]:  # type: ignore[override]
+        return tuple(self.layout_of)
+
+    def _matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        per_axis = 2 if tuple(self.layout_of) in (CV_2D, CV_3D) else 3
+        F1 = np.zeros((per_axis, per_axis))
+        F1[0, 0] = 1.0
+        Q1 = np.diag([self.q * dt] + [self.sigma_rate**2] * (per_axis - 1))
+        return _per_axis(F1, Q1, len(self.layout_of) // per_axis)
 
 
 def _ct_coefficients(omega: np.ndarray | float, T: float):

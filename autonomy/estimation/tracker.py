@@ -13,8 +13,10 @@
   (:class:`~autonomy.estimation.tracking.deleter.UpdateTimeDeleter`), or after ``max_missed_scans`` position-fixing
   scans in a row that miss the track (:class:`~autonomy.estimation.tracking.deleter.MissedScansDeleter`); either way
   the next detections re-initiate a track;
-- the filter: ``ekf``, ``ukf``, ``ckf``, ``scif`` on the ``cv`` or ``singer`` model, or ``imm``, paper 003's IMM of CV
-  and CT(±ω) EKFs (:func:`~autonomy.estimation.imm.cv_ct_imm`) on the ``cv`` layout (:class:`ConfiguredFilters`).
+- the filter: ``ekf``, ``ukf``, ``ckf``, ``scif`` on the ``cv`` or ``singer`` model, or ``imm``: paper 003's IMM of CV
+  and CT(±ω) EKFs (:func:`~autonomy.estimation.imm.cv_ct_imm`) on the ``cv`` layout (``imm_modes="cv_ct"``), or a
+  car that moves and stops, EKFs on the ``cv`` or ``singer`` model and on a stopped car
+  (:func:`~autonomy.estimation.imm.move_stop_imm`, ``imm_modes="move_stop"``) (:class:`ConfiguredFilters`).
 
 In a consensus team (HCMCI, :mod:`autonomy.fusion.hcmci_team`) :meth:`SingleTargetTracker.step_information` replaces
 :meth:`~SingleTargetTracker.step` (:mod:`autonomy.estimation.tracking.information`); the team's consensus result goes
@@ -35,7 +37,7 @@ import numpy as np
 
 from autonomy.estimation.base import Filter
 from autonomy.estimation.factory import make_filter
-from autonomy.estimation.imm import cv_ct_imm
+from autonomy.estimation.imm import cv_ct_imm, move_stop_imm
 from autonomy.estimation.measurements import MeasurementLike
 from autonomy.estimation.models import ConstantVelocity, MotionModel, Singer
 from autonomy.estimation.tracking.associator import NearestNeighbourAssociator
@@ -56,7 +58,7 @@ class TrackerConfig:
     Attributes
     ----------
     filter : str
-        ``ekf``, ``ukf``, ``ckf``, ``scif``, or ``imm`` (CV + CT(±``imm_turn_rate``) EKFs; needs ``model="cv"``).
+        ``ekf``, ``ukf``, ``ckf``, ``scif``, or ``imm`` (the modes ``imm_modes`` names).
     model : str
         Motion model: ``cv`` (nearly constant velocity) or ``singer``.
     q : float
@@ -91,18 +93,27 @@ class TrackerConfig:
         velocity σ near 90 m/s; a car's speed prior bounds that.
     target_height : float
         Height of the ground targets (m).
+    imm_modes : str
+        ``imm``: ``cv_ct`` (paper 003: CV + CT(±``imm_turn_rate``) EKFs; needs ``model="cv"``) or ``move_stop`` (EKFs
+        on ``model`` and on a stopped car, :func:`~autonomy.estimation.imm.move_stop_imm`).
     imm_turn_rate : float
         ``imm``: turn rate ω of the two coordinated-turn modes (rad/s), > 0.
     imm_q_turn : float
         ``imm``: white-acceleration spectral density of the turn modes (m²/s³), > 0 (the CV mode uses ``q``).
     imm_p_stay : float
-        ``imm``: diagonal of the mode-transition matrix, in (0, 1); the rest is spread evenly.
+        ``imm`` ``cv_ct``: diagonal of the mode-transition matrix, in (0, 1); the rest is spread evenly.
+    imm_mean_moving_s, imm_mean_stopped_s : float
+        ``imm`` ``move_stop``: mean time a car drives before it stops, and stays stopped (s), > 0
+        (:class:`~autonomy.estimation.imm.MoveStopSwitching`).
+    imm_stopped_q : float
+        ``imm`` ``move_stop``: position random-walk density of a stopped car (m²/s), >= 0.
     stack_scans : bool
         Stack the detections of all sensors taken at one time into one update (module docstring).
     min_crossing_angle : float
         Smallest angle between two bearing lines for their intersection to fix a position (rad), in (0, π/2].
     ekf_iterations : int
-        ``ekf``: linearisations per update, >= 1 (1: the plain EKF; more: the iterated EKF, :class:`~.ekf.EKF`).
+        ``ekf`` (and the EKFs of the ``move_stop`` imm): linearisations per update, >= 1 (1: the plain EKF; more: the
+        iterated EKF, :class:`~.ekf.EKF`).
     """
 
     filter: str = "ekf"
@@ -122,6 +133,10 @@ class TrackerConfig:
     imm_turn_rate: float = 0.3
     imm_q_turn: float = 0.05
     imm_p_stay: float = 0.95
+    imm_modes: str = "cv_ct"
+    imm_mean_moving_s: float = 30.0
+    imm_mean_stopped_s: float = 10.0
+    imm_stopped_q: float = 0.01
     stack_scans: bool = False
     min_crossing_angle: float = float(np.deg2rad(10.0))
     ekf_iterations: int = 1
@@ -131,9 +146,16 @@ class TrackerConfig:
             raise ValueError(f"TrackerConfig.filter must be ekf|ukf|ckf|scif|imm, got {self.filter!r}")
         if self.model not in ("cv", "singer"):
             raise ValueError(f"TrackerConfig.model must be cv|singer, got {self.model!r}")
-        if self.filter == "imm" and self.model != "cv":
-            raise ValueError(f"TrackerConfig.model must be cv with the imm filter (its modes share the CV layout), "
+        if self.imm_modes not in ("cv_ct", "move_stop"):
+            raise ValueError(f"TrackerConfig.imm_modes must be cv_ct|move_stop, got {self.imm_modes!r}")
+        if self.filter == "imm" and self.imm_modes == "cv_ct" and self.model != "cv":
+            raise ValueError(f"TrackerConfig.model must be cv with the cv_ct imm (its modes share the CV layout), "
                              f"got {self.model!r}")
+        for name in ("imm_mean_moving_s", "imm_mean_stopped_s"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise ValueError(f"TrackerConfig.{name} must be finite and > 0 s, got {getattr(self, name)!r}")
+        if not (np.isfinite(self.imm_stopped_q) and self.imm_stopped_q >= 0):
+            raise ValueError(f"TrackerConfig.imm_stopped_q must be finite and >= 0 m²/s, got {self.imm_stopped_q!r}")
         for name in ("imm_turn_rate", "imm_q_turn"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"TrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
@@ -177,6 +199,11 @@ class ConfiguredFilters:
     def __call__(self, x0: np.ndarray, P0: np.ndarray, t0: float) -> Filter:
         """The filter started from ``(x0, P0)`` at ``t0`` (s)."""
         cfg = self.config
+        if cfg.filter == "imm" and cfg.imm_modes == "move_stop":
+            iterations = {"iterations": cfg.ekf_iterations} if cfg.ekf_iterations > 1 else {}
+            return move_stop_imm(x0, P0, t0, moving=self.model, mean_moving_s=cfg.imm_mean_moving_s,
+                                 mean_stopped_s=cfg.imm_mean_stopped_s, stopped_q=cfg.imm_stopped_q,
+                                 target_height=cfg.target_height, **iterations)
         if cfg.filter == "imm":
             return cv_ct_imm(x0, P0, t0, q_cv=cfg.q, q_ct=cfg.imm_q_turn, turn_rate=cfg.imm_turn_rate,
                              p_stay=cfg.imm_p_stay, target_height=cfg.target_height)

@@ -207,3 +207,44 @@ def test_track_reports_are_made_once_per_step_and_follow_every_change():
     tr.cue(2.0, np.array([20.0, 0.0]), 5.0)
     cued = tr.track_reports()
     assert all(a is not b for a, b in zip(fresh, cued, strict=True))
+
+
+
+def _stop_and_go(cfg: TrackerConfig) -> tuple[np.ndarray, np.ndarray, set, list]:
+    """Two cars 40 m apart on one road at 8 m/s, position detections of σ 6 m at 2 Hz; the cued one stands from 20
+    to 40 s and drives off. Times, target errors, target track ids and (time, stop-mode probability) from 5 s on."""
+    rng = np.random.default_rng(8)
+    sigma = 6.0
+    ident = IdentityConfig(target_classes={"colour": 1}, background=BG, background_density=1e-5)
+    tr = MultiTargetTracker(cfg, MultiTrackerConfig(associator="gnn"), ident)
+    tr.cue(0.0, np.array([0.0, 0.0]), sigma_m=10.0)
+    x, times, errors, ids, mu_stop = 0.0, [], [], set(), []
+    for k in range(120):
+        t = 0.5 * k
+        x += (0.0 if 20.0 <= t < 40.0 else 8.0) * 0.5
+        cars = [np.array([x, 0.0]), np.array([40.0 + 8.0 * t, 0.0])]
+        scan = [Detection(z=c + rng.normal(0, sigma, 2), R=np.eye(2) * sigma**2, t_meas=t, t_arrival=t, sensor_id="s",
+                          p_sensor_W=np.array([0.0, 0.0, 100.0]), kind="box") for c in cars]
+        est = tr.step(t, scan)
+        if k >= 10:
+            times.append(t)
+            errors.append(np.linalg.norm(est.p_W - cars[0]))
+            ids.add(tr.target_track_id)
+            track = next(tk for tk in tr.tracks if tk.track_id == tr.target_track_id)
+            mu_stop.append(getattr(track.filter, "mu", [1.0, 0.0])[1])
+    return np.array(times), np.array(errors), ids, np.array(mu_stop)
+
+
+def test_a_car_that_stops_and_drives_off_keeps_its_track_under_the_move_stop_imm():
+    """The per-track move–stop IMM holds the car through the stop (its stop mode takes over: measured 0.79 against
+    0.07 while it drives) with less error than the Singer EKF alone on the same detections (measured 1.6 against
+    4.5 m), and the same track follows it when it drives again."""
+    singer = {"model": "singer", "singer_alpha": 0.6, "singer_sigma_a": 2.0, "max_target_speed": 30.0,
+              "lost_after_s": 3.0}
+    t, err, ids, mu = _stop_and_go(TrackerConfig(filter="imm", imm_modes="move_stop", **singer))
+    _, err_ekf, ids_ekf, _ = _stop_and_go(TrackerConfig(filter="ekf", **singer))
+    assert len(ids) == 1 == len(ids_ekf)
+    standing, driving = (t >= 25.0) & (t < 40.0), (t >= 50.0) | (t < 20.0)
+    assert mu[standing].mean() > 0.6 and mu[driving].mean() < 0.2
+    assert err[standing].mean() < 0.8 * err_ekf[standing].mean()
+    assert err.max() < 15.0

@@ -8,8 +8,10 @@ older than ``max_age_s``:
    teammate's picture once for all its receivers (:func:`~.track_sets.track_set`);
 2. the teammate's tracks are assigned to one's own by ``scipy.optimize.linear_sum_assignment`` on the Mahalanobis
    distance of the position difference, ``dᵀ (P_a + P_b)⁻¹ d`` (cross-covariance ignored, as the convex fusion
-   does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``; only assigned
-   pairs are one car (through k-d trees, each cluster of nearby cars alone: :func:`~.track_sets.associate_sets`);
+   does; covariance intersection does not need it), gated at the χ²₂ quantile ``gate_probability``, plus what the
+   two tracks' target probabilities say about their being one car (:func:`~.track_sets.identity_cost`); only
+   assigned pairs are one car (through k-d trees, each cluster of nearby cars alone:
+   :func:`~.track_sets.associate_sets`);
 3. the team's belief of which car is the target is the linear opinion pool of the members' beliefs: one's own
    track k has team probability ``(p_k + Σ_j p_j) / n``, its own target probability plus those of the teammates'
    tracks assigned to it, over the ``n`` UAVs whose pictures are in (oneself included). A car only a teammate holds
@@ -37,7 +39,7 @@ from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
 from .track_fusion import PredictedEstimates, fuse_estimates
-from .track_sets import TrackSet, associate_sets, mahalanobis2, track_set
+from .track_sets import TrackSet, associate_sets, big_cost, identity_cost, mahalanobis2, track_set
 
 __all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "track_picture"]
 
@@ -73,27 +75,36 @@ def track_picture(estimator: object, t: float) -> TrackPicture | None:
                         target_track_id=estimator.target_track_id)
 
 
-def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate],
-                     threshold: float) -> list[tuple[int, int]]:
-    """Pairs ``(i, j)`` of ``own[i]`` and ``other[j]`` (estimates at one time) that are one car: the assignment of
-    least total Mahalanobis position distance among the pairs under ``threshold`` (χ², 2 degrees of freedom)."""
+def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate], threshold: float,
+                     q_own: Sequence[float] | None = None, q_other: Sequence[float] | None = None,
+                     ) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)`` of ``own[i]`` and ``other[j]`` (estimates at one time) that are one car: among the pairs whose
+    Mahalanobis position distance is under ``threshold`` (χ², 2 degrees of freedom), the most pairs, and of those
+    the assignment of least total distance plus :func:`~.track_sets.identity_cost` of the tracks' target
+    probabilities ``q_own`` and ``q_other`` (None: all 0)."""
     if not own or not other:
         return []
     return associate_positions(np.array([e.p_W[:2] for e in own]), np.array([e.P[:2, :2] for e in own]),
-                               np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold)
+                               np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold,
+                               None if q_own is None else np.asarray(q_own, dtype=float),
+                               None if q_other is None else np.asarray(q_other, dtype=float))
 
 
-def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray,
-                        threshold: float) -> list[tuple[int, int]]:
+def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray, threshold: float,
+                        qa: np.ndarray | None = None, qb: np.ndarray | None = None) -> list[tuple[int, int]]:
     """:func:`associate_tracks` of positions ``pa`` (n, 2) and ``pb`` (m, 2) (m) with covariances ``Pa`` (n, 2, 2) and
-    ``Pb`` (m, 2, 2) (m²)."""
+    ``Pb`` (m, 2, 2) (m²) and target probabilities ``qa`` (n,) and ``qb`` (m,): the plain dense assignment, the
+    reference of :func:`~.track_sets.associate_sets`."""
     if len(pa) == 0 or len(pb) == 0:
         return []
     maha = mahalanobis2(pa[:, None, :], Pa[:, None], pb[None, :, :], Pb[None, :])  # (n, m)
-    big = threshold * 10.0 + 1.0
-    cost = np.where(maha <= threshold, maha, big)
+    qa = np.zeros(len(pa)) if qa is None else qa
+    qb = np.zeros(len(pb)) if qb is None else qb
+    ident = identity_cost(qa[:, None], qb[None, :], max(len(pa), len(pb)))
+    big = big_cost(threshold)
+    cost = np.where(maha <= threshold, maha + ident, big)
     rows, cols = linear_sum_assignment(cost)
-    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if cost[i, j] <= threshold]
+    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if cost[i, j] < big]
 
 
 class TeamTrackFusion:

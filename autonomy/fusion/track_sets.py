@@ -9,9 +9,14 @@ of the team's autonomy time. :func:`associate_sets` makes the pairs of
 farther apart than ``sqrt(χ² · (λ_a + λ_b))``, the λ the largest covariance eigenvalues of the two sets, is inside the
 gate) instead of the distance of every own track to every teammate track, and solves each connected component of the
 gating graph alone with the tracker's compiled GNN kernels: with a cost ``big`` for a pair outside the gate, the
-dense assignment's cost is ``big · min(n, m) + Σ (d² − big)`` over the gated pairs it makes (every partial matching
+dense assignment's cost is ``big · min(n, m) + Σ (c − big)`` over the gated pairs it makes (every partial matching
 extends to a full one with non-gated pairs), and with the same miss cost ``big`` for every track the least-cost
-assignment with misses makes the same matching of greatest ``Σ (big − d²)``, which splits over the components.
+assignment with misses makes the same matching of greatest ``Σ (big − c)``, which splits over the components.
+
+A gated pair's cost ``c = d² + c_id`` adds to the Mahalanobis distance what the two tracks' target probabilities say
+about whether they are one car (feature-aided track association; :func:`identity_cost`): a teammate's track it takes
+for the target pairs with one's own target track before a track one holds for another car, where the kinematics
+alone cannot tell (two tracks of a car that stopped and drove off, a radar track left where it stood).
 """
 
 from __future__ import annotations
@@ -29,7 +34,26 @@ from interfaces.state import TrackPicture, TrackReport
 
 from .track_fusion import PredictedEstimates
 
-__all__ = ["TrackSet", "associate_sets", "mahalanobis2", "track_set"]
+__all__ = ["ID_COST_SPAN", "TrackSet", "associate_sets", "identity_cost", "mahalanobis2", "track_set"]
+
+P_FLOOR = 1e-4
+"""Target probabilities are taken within ``[P_FLOOR, 1 − P_FLOOR]`` in the association: no belief is certain."""
+ID_COST_SPAN = float(-2.0 * math.log(P_FLOOR * (1.0 - P_FLOOR)))
+"""The largest :func:`identity_cost` (≈ 18.4)."""
+
+
+def identity_cost(qa: np.ndarray, qb: np.ndarray, n_tracks: int) -> np.ndarray:
+    """What the target probabilities ``qa`` and ``qb`` of two tracks (broadcast) add to their association cost:
+    ``−2 ln κ`` with ``κ = q_a q_b / π + (1 − q_a)(1 − q_b) / (1 − π)`` the likelihood ratio of the two beliefs under
+    "one car" against "two cars" (under one car both speak of one identity, drawn with prior ``π``; under two the
+    beliefs are independent), ``π = 1 / (n_tracks + 1)`` the prior that a track is the target among ``n_tracks``
+    (and "in no track"). Shifted by ``2 ln max(1/π, 1/(1 − π))``, the largest κ, so every cost is in
+    ``[0, ID_COST_SPAN]``: among matchings with as many pairs (what the association compares) the shift cancels."""
+    prior = 1.0 / (max(int(n_tracks), 1) + 1.0)
+    a = np.clip(qa, P_FLOOR, 1.0 - P_FLOOR)
+    b = np.clip(qb, P_FLOOR, 1.0 - P_FLOOR)
+    kappa = a * b / prior + (1.0 - a) * (1.0 - b) / (1.0 - prior)
+    return 2.0 * np.log(max(1.0 / prior, 1.0 / (1.0 - prior)) / kappa)
 
 
 def mahalanobis2(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray) -> np.ndarray:
@@ -109,6 +133,11 @@ def track_set(picture: TrackPicture, t: float, q: float) -> TrackSet:
     return made
 
 
+def big_cost(threshold: float) -> float:
+    """The cost of a pair outside the gate (and of a track left alone): above every gated pair's cost by far."""
+    return (threshold + ID_COST_SPAN) * 10.0 + 1.0
+
+
 def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int, int]]:
     """:func:`~.track_association.associate_positions` of the tracks of ``a`` and ``b`` (the same pairs, sorted),
     gating only the pairs a k-d tree finds within the gate's reach, and solving each connected component of the
@@ -121,14 +150,15 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     i, j = near["i"].astype(np.int64), near["j"].astype(np.int64)
     d2 = mahalanobis2(a.xy[i], a.P[i], b.xy[j], b.P[j])
     keep = d2 <= threshold
-    rows, cols, cost = i[keep], j[keep], d2[keep]
+    rows, cols = i[keep], j[keep]
     if not rows.size:
         return []
+    cost = d2[keep] + identity_cost(a.p[rows], b.p[cols], max(n, m))
     by = np.lexsort((cols, rows))  # row-major, as the assignment kernels take pairs
     rows, cols, cost = rows[by], cols[by], cost[by]
     # with the same cost ``big`` for every own track left alone, the least-cost assignment with misses is the
-    # assignment of least cost with ``big`` outside the gate: both make the gated matching of greatest Σ (big − d²)
-    miss = np.full(n, threshold * 10.0 + 1.0)
+    # assignment of least cost with ``big`` outside the gate: both make the gated matching of greatest Σ (big − c)
+    miss = np.full(n, big_cost(threshold))
     order, starts = kernels.pair_clusters(rows, cols, n)
     take, hard = kernels.gnn_clusters(rows, cols, cost, miss, order, starts, n, m, 500)
     chosen = [take] + [solve_component(*kernels.cluster_matrix(rows, cols, cost, order, starts[h], starts[h + 1], n,

@@ -1,5 +1,6 @@
-"""A teammate's picture is predicted once for all its receivers, and the team's association through k-d trees and
-per-component solves makes the pairs of the whole assignment (autonomy/fusion/track_sets.py)."""
+"""A teammate's picture is predicted once for all its receivers, the team's association through k-d trees and
+per-component solves makes the pairs of the whole assignment, and the tracks' target probabilities take part in it
+(autonomy/fusion/track_sets.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from autonomy.fusion.track_association import TeamTrackFusion, associate_positions
-from autonomy.fusion.track_sets import TrackSet, associate_sets, track_set
+from autonomy.fusion.track_sets import ID_COST_SPAN, TrackSet, associate_sets, identity_cost, track_set
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
 CHI2_2_999 = 13.815510557964274
@@ -23,14 +24,14 @@ def _whole_assignment(pa, Pa, pb, Pb, threshold):
     return sorted((int(i), int(j)) for i, j in zip(r, c, strict=True) if cost[i, j] <= threshold)
 
 
-def _set(rng, xy, var) -> TrackSet:
+def _set(rng, xy, var, q=None) -> TrackSet:
     reps = []
     for k, (x, y) in enumerate(xy):
         a, b = rng.uniform(0.3, 1.0, 2) * var
         P = np.diag([a, b, 4.0, 4.0])
         P[0, 1] = P[1, 0] = rng.uniform(-0.5, 0.5) * np.sqrt(a * b)
         est = TargetEstimate(t=9.7, p_W=np.array([x, y]), v_W=rng.normal(0, 5, 2), P=P)
-        reps.append(TrackReport(track_id=k + 1, estimate=est, target_probability=0.0))
+        reps.append(TrackReport(track_id=k + 1, estimate=est, target_probability=0.0 if q is None else q[k]))
     return TrackSet.of(reps, 10.0, 1.0)
 
 
@@ -89,3 +90,51 @@ def test_receivers_of_one_picture_choose_and_fuse_the_same():
     assert all(o.own_track_id == 104 and o.fused_with == 1 for o in outs)
     assert outs[0].probability == outs[2].probability == (0.8 + 0.9) / 2
     np.testing.assert_array_equal(outs[0].estimate.p_W, outs[2].estimate.p_W)
+
+
+def test_identity_cost_is_the_likelihood_ratio_of_one_car_against_two():
+    # π = 1/4 among 3 tracks: κ = 0.9·0.8·4 + 0.1·0.2·4/3, shifted by the largest κ, 4
+    np.testing.assert_allclose(identity_cost(np.array(0.9), np.array(0.8), 3),
+                               2 * np.log(4 / (0.72 * 4 + 0.02 * 4 / 3)), rtol=1e-12)
+    both, neither, split = identity_cost(np.array([0.99, 0.0, 0.99]), np.array([0.99, 0.0, 0.0]), 20)
+    assert 0 <= both < 0.1 < neither < split <= ID_COST_SPAN  # two target tracks are one car before two others
+    assert identity_cost(np.array(1.0), np.array(0.0), 1) == identity_cost(np.array(0.0), np.array(1.0), 1)
+    # π = 1/2: κ = 4 f (1 − f) at the floor f, against the largest κ, 2
+    np.testing.assert_allclose(identity_cost(np.array(1.0), np.array(0.0), 1), ID_COST_SPAN - 2 * np.log(2),
+                               rtol=1e-9)
+
+
+def test_the_association_with_target_probabilities_is_the_whole_assignment_too():
+    rng = np.random.default_rng(11)
+    for _ in range(400):
+        n, m = rng.integers(1, 30, 2)
+        cars = rng.uniform(-60.0, 60.0, (max(n, m) + 3, 2))
+        qa, qb = (np.where(rng.random(k) < 0.2, rng.random(k), 0.0) for k in (n, m))
+        a = _set(rng, cars[rng.choice(len(cars), n, replace=False)] + rng.normal(0, 3, (n, 2)), 100.0, qa)
+        b = _set(rng, cars[rng.choice(len(cars), m, replace=False)] + rng.normal(0, 3, (m, 2)), 100.0, qb)
+        assert associate_sets(a, b, CHI2_2_999) == sorted(associate_positions(a.xy, a.P, b.xy, b.P, CHI2_2_999,
+                                                                              a.p, b.p))
+
+
+def _report(track_id, xy, sd, q):
+    P = np.diag([sd**2, sd**2, 4.0, 4.0])
+    return TrackReport(track_id=track_id, estimate=TargetEstimate(t=10.0, p_W=np.array(xy, dtype=float),
+                                                                  v_W=np.zeros(2), P=P), target_probability=q)
+
+
+def test_two_target_tracks_pair_where_the_positions_alone_would_cross_them():
+    """One UAV's radar track of the target stayed where the car stood (σ 14 m) and a new track of its took the car
+    as it drove off (σ 11 m, not yet the target); the teammate's camera holds the target (σ 0.7 m) and another car
+    (σ 2 m). By position alone the least-cost pairs cross (each within the gate); with the target probabilities the
+    target tracks pair, and the team's target is the car the camera holds."""
+    own = [_report(19, (0.0, 0.0), 14.0, 0.998), _report(22, (-5.0, 27.0), 11.0, 0.0)]
+    mate = [_report(18, (-3.0, 8.0), 0.7, 0.997), _report(4, (-26.0, -6.0), 2.0, 0.0)]
+    xy = [np.array([r.estimate.p_W for r in rs]) for rs in (own, mate)]
+    P = [np.array([r.estimate.P[:2, :2] for r in rs]) for rs in (own, mate)]
+    assert sorted(associate_positions(xy[0], P[0], xy[1], P[1], CHI2_2_999)) == [(0, 1), (1, 0)]
+    a, b = TrackSet.of(own, 10.0, 1.0), TrackSet.of(mate, 10.0, 1.0)
+    assert associate_sets(a, b, CHI2_2_999) == [(0, 0), (1, 1)]
+    team = TeamTrackFusion("convex", max_age_s=2.0, q=1.0).fuse(10.0, None, own, 19, [TrackPicture(
+        t=10.0, tracks=tuple(mate), target_track_id=18)])
+    assert team.own_track_id == 19 and team.fused_with == 1
+    assert np.hypot(*(team.estimate.p_W - [-3.0, 8.0])) < 0.5

@@ -221,7 +221,7 @@ def _links_plot(plt: object, rec: RunRecord, world: object | None, plots: Path) 
     t = np.unique(ut["t"])
     z = np.stack([np.interp(t, _by(ut, "uav", u)["t"], _by(ut, "uav", u)["z"]) for u in uavs], axis=1)
     pos = np.concatenate([_uav_xy_on(ut, uavs, t), z[..., None]], axis=2)
-    pr = np.array([[link[2] for link in links.at(float(tk), list(pos[k]))] for k, tk in enumerate(t)])
+    pr = links.series(t, pos)
     names = [u.id for u in world.uavs]
     pairs = [(i, j) for i in uavs for j in uavs if i < j]
     fig, ax = plt.subplots(figsize=(9, 3.2), dpi=110)

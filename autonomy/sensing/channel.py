@@ -341,6 +341,22 @@ class Channel:
         np.fill_diagonal(P, 1.0)
         return P
 
+    def link_matrices(self, nodes: Sequence[str], positions: np.ndarray, ticks: Sequence[int]) -> np.ndarray:
+        """(T, N, N) :meth:`link_matrix` at each of ``ticks`` (T,) with the ``nodes``' positions (T, N, 3) m there:
+        the fading, range and line of sight of every pair at every tick in one batch (one scene query for a whole
+        recorded run: its plot and export), then each tick's link schedule."""
+        nodes = tuple(nodes)
+        pts = np.asarray(positions, dtype=float).reshape(len(ticks), len(nodes), 3)
+        iu, ju = np.triu_indices(len(nodes), k=1)
+        pr = self._pair_probabilities(pts[:, iu].reshape(-1, 3), pts[:, ju].reshape(-1, 3)).reshape(len(ticks), -1)
+        out = np.tile(np.eye(len(nodes)), (len(ticks), 1, 1))
+        for k, tick in enumerate(ticks):
+            P = out[k]
+            P[iu, ju] = P[ju, iu] = pr[k]
+            P[~scheduled_links(nodes, self.config.links, self._outages, int(tick))] = 0.0
+            np.fill_diagonal(P, 1.0)
+        return out
+
     def _pair_probabilities(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """(K,) delivery probabilities of the links from ``a[k]`` to ``b[k]`` (K, 3) m: fading, range and, with
         ``block_by_buildings``, line of sight (the link schedule and outages are the callers')."""

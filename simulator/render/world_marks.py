@@ -102,3 +102,14 @@ class RadioLinks:
         P = self.channel.link_matrix(self.names, dict(zip(self.names, positions, strict=True)), tick)
         n = len(self.names)
         return [(positions[i], positions[j], float(P[i, j])) for i in range(n) for j in range(i + 1, n)]
+
+    def series(self, t: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """(T, pairs) delivery probabilities of every UAV pair (in :meth:`at`'s order) at times ``t`` (T,) s from the
+        positions (T, N, 3) m, in one batch (:meth:`~autonomy.sensing.channel.Channel.link_matrices`)."""
+        n = len(self.names)
+        if not self.active:
+            return np.zeros((len(t), n * (n - 1) // 2))
+        ticks = [int(round(float(tk) * self.physics_hz)) for tk in t]
+        P = self.channel.link_matrices(self.names, positions, ticks)
+        iu, ju = np.triu_indices(n, k=1)
+        return P[:, iu, ju]

@@ -243,3 +243,22 @@ def test_the_fixed_chain_relays_through_the_node_before_whatever_the_links():
     assert mst.parent == minimum_spanning_tree_routes(nodes, P, "base").parent
     with pytest.raises(ValueError, match="root"):
         chain_routes(nodes, P, "hub")
+
+
+def test_link_matrices_are_the_link_matrix_of_each_tick():
+    rng = np.random.default_rng(12)
+    buildings = [Building.cuboid(rng.uniform(-300, 300, 2), (*rng.uniform(10, 40, 2), rng.uniform(20, 90)))
+                 for _ in range(40)]
+    cfg = ChannelConfig(links=(("a", "b"), ("b", "c"), ("c", "d"), ("a", "d"), ("a", "c")),
+                        outages=(LinkOutage(node_a="c", node_b="a", start_s=0.2, end_s=0.6),))
+    ch = Channel(cfg, TICK_HZ, np.random.default_rng(0), scene=FakeScene(buildings))
+    nodes = ("a", "b", "c", "d")
+    ticks = [int(k * 0.05 * TICK_HZ) for k in range(20)]
+    pos = np.c_[rng.uniform(-350, 350, (20 * 4, 2)), rng.uniform(30, 100, 20 * 4)].reshape(20, 4, 3)
+    batch = ch.link_matrices(nodes, pos, ticks)
+    one = np.array([ch.link_matrix(nodes, dict(zip(nodes, p, strict=True)), tk) for p, tk in zip(pos, ticks,
+                                                                                                 strict=True)])
+    np.testing.assert_array_equal(batch, one)
+    blocked = one[:, [0, 0, 1, 2], [1, 3, 2, 3]] == 0.0
+    assert blocked.any() and not blocked.all()  # buildings cut some scheduled links, not all
+    assert (one[4:12, 0, 2] == 0).all() and (one[:4, 0, 2] > 0).any()  # the outage of a-c from 0.2 to 0.6 s

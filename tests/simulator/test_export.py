@@ -190,20 +190,3 @@ def test_mcap_messages_conform_to_their_channels_schemas(demo_run, tmp_path):
             problems += _conforms(json.loads(message.data), json.loads(schema.data), channel.topic)
     assert problems == []
     assert set(seen) == {"foxglove.SceneUpdate", "foxglove.FrameTransform", "skytrack.Series"}
-
-
-def test_box_filtered_scene_answers_as_the_fake_scene():
-    from autonomy.sensing.fake_scene import FakeScene
-    from simulator.export.links import BoxFilteredScene
-    from worlds.geometry import Building
-
-    rng = np.random.default_rng(3)
-    buildings = [Building.cuboid(rng.uniform(-200, 200, 2), (*rng.uniform(5, 40, 2), rng.uniform(5, 60)),
-                                 yaw=rng.uniform(0, np.pi)) for _ in range(60)]
-    buildings.append(Building(footprint=np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 30.0], [15.0, 10.0], [0.0, 30.0]]),
-                              height=20.0))  # not convex: several prisms
-    a = np.c_[rng.uniform(-250, 250, (400, 2)), rng.uniform(1, 70, 400)]
-    b = np.c_[rng.uniform(-250, 250, (400, 2)), rng.uniform(1, 70, 400)]
-    want = FakeScene(buildings).line_of_sight(a, b)
-    assert 50 < int((~want).sum()) < 350  # both answers occur
-    assert np.array_equal(BoxFilteredScene(buildings).line_of_sight(a, b), want)

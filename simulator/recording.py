@@ -80,6 +80,7 @@ class Recording:
         self.contacts = contacts
         self.event_counts_by_uav: dict[tuple[str, int], int] = {}
         self._touching: set[tuple[int, int]] = set()
+        self._target_track: dict[int, int | None] = {}  # per UAV, the track its estimator last took for the target
 
     def truth(self, tick: int, t: float, quads: UavFleet | None, cars: GroundFleet | None) -> None:
         """One ``uav_truth`` row per UAV and one ``vehicle_truth`` row per ground vehicle."""
@@ -130,12 +131,26 @@ class Recording:
 
     def tracks(self, tick: int, t: float, uav: int, estimator: TargetEstimator) -> None:
         """One ``tracks`` row per live track of a multi-target estimator (:class:`~autonomy.diagnostics.HoldsTracks`)
-        after its step; nothing for other estimators."""
+        after its step, and a ``target_track_changed`` event when the track it takes for the target is another than
+        at its last step (``from_track`` / ``to_track``, None for no track; ``from_alive``: whether the old track
+        still lives, so a switch between live tracks tells from a lost or merged one; the new track's ``p`` and
+        position); nothing for other estimators."""
         if not isinstance(estimator, HoldsTracks):
             return
         target = estimator.target_track_id
-        for rep in estimator.track_reports():
+        reports = estimator.track_reports()
+        for rep in reports:
             self.recorder.append("tracks", **track_row(tick, t, uav, rep, rep.track_id == target))
+        before = self._target_track.get(uav)
+        if target == before:
+            return
+        self._target_track[uav] = target
+        now = next((r for r in reports if r.track_id == target), None)
+        self.event(tick, t, {"type": "target_track_changed", "uav": uav, "from_track": before, "to_track": target,
+                             "from_alive": any(r.track_id == before for r in reports),
+                             "p": None if now is None else float(now.target_probability),
+                             "x": None if now is None else float(now.estimate.p_W[0]),
+                             "y": None if now is None else float(now.estimate.p_W[1])})
 
     def sharing(self, tick: int, t: float, uav: int, estimator: TargetEstimator, received: int,
                 own_sensors: set[str]) -> None:

@@ -24,6 +24,8 @@
   ``motp_m``, ``idf1``, ``num_switches``, ``mostly_tracked``, ``mostly_lost``, ``false_positives``, ``misses``,
   ``truth_instances``, ``matches``, ``gospa_mean_m``, with the ``steps`` scored and the ``match_radius_m``. A partial
   record may hold these from fewer steps than its other metrics (they are rescored as the steps grow by a quarter);
+  and ``uavs.<id>.target_track_changes``, how often the track the estimator takes for the target changed (each a
+  ``target_track_changed`` event in ``events.jsonl``: which track to which, whether the old one still lives);
 - ``base_station`` (UAVs fusing at a base station, paper 001): base steps, packets sent / delivered / lost / late /
   fused and the delivery ratio; per fusing UAV (``uavs.<id>``) the mean route probability β, mean hop count, packets
   sent and delivered, delivery ratio and the steps at which it relayed for another UAV; and the base's own estimate
@@ -232,6 +234,8 @@ class MetricsTracker:
                 "collisions": counts.get(("collision", i), 0),
                 "command_saturations": counts.get(("command_saturated", i), 0),
             }
+            if slot is not None and isinstance(getattr(slot.agent, "estimator", None), HoldsTracks):
+                m["target_track_changes"] = counts.get(("target_track_changed", i), 0)
             if self.min_sep is not None and np.isfinite(self.min_sep[i]):
                 m["min_separation_m"] = float(self.min_sep[i])
             law = slot.agent.guidance if slot is not None else None

@@ -33,8 +33,8 @@ from worlds.schema import FormationSpec, GuidanceSpec, ImmSpec, InfoPlanSpec, Ja
 
 # settings model -> (component config, config fields a builder fills from elsewhere: the type, the team, the world)
 PARAMS = [
-    (ss.TrackerSettings, TrackerConfig, {"filter", "model", "stack_scans", "imm_turn_rate", "imm_q_turn",
-                                         "imm_p_stay"}),
+    (ss.TrackerSettings, TrackerConfig, {"filter", "model", "stack_scans"} | {  # imm_*: the estimator's imm block
+        f.name for f in dataclasses.fields(TrackerConfig) if f.name.startswith("imm_")}),
     (ss.RoadSettings, RoadFilterConfig, {"variant"}),
     (ss.RoadConstraintSettings, RoadConstraintParams, set()),
     (ss.SetMembershipSettings, SetMembershipConfig, {"max_target_speed"}),

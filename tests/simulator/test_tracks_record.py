@@ -63,10 +63,10 @@ def _report(tid: int, t: float, xy: np.ndarray, p: float, ev: float, confirmed: 
     return TrackReport(track_id=tid, estimate=est, target_probability=p, evidence=ev, confirmed=confirmed)
 
 
-def _run(tmp_path, ticks: int = DIV * STEPS, partial_at: Sequence[int] = ()):
+def _run(tmp_path, ticks: int = DIV * STEPS, partial_at: Sequence[int] = (), tracker=None):
     uavs = ScriptedUavs(lambda k: np.array([[0.0, -50.0, 40.0], [10.0, -50.0, 40.0]]), HZ)
     cars = ScriptedCars(lambda k: CARS, HZ)
-    tracker_est = ScriptedTracker()
+    tracker_est = ScriptedTracker() if tracker is None else tracker
     agents = [AgentSlot(uav=0, agent=Agent("a", tracker_est, LogGuidance()), divisor=DIV),
               AgentSlot(uav=1, agent=Agent("b", LogEstimator([], "b"), LogGuidance()), divisor=DIV)]
     recorder = RunRecorder(tmp_path, schemas=STREAMS)
@@ -158,3 +158,34 @@ def test_steps_without_a_track_write_no_rows_and_count_misses(tmp_path):
     rec, m, _ = _run(tmp_path, ticks=DIV * 2)  # only steps without any track
     assert "tracks" not in rec.streams
     assert m["uavs"]["a"]["mot"]["misses"] == 4
+
+
+class SwitchingTracker(ScriptedTracker):
+    """:class:`ScriptedTracker`'s tracks, but it takes track 2 for the target at steps 8-9, and from step 10 holds
+    track 2 alone (track 1 ended) and takes none."""
+
+    def step(self, t: float, detections: Sequence[Detection]) -> TargetEstimate | None:
+        super().step(t, detections)
+        if self.j >= 10:
+            self.reports = [r for r in self.reports if r.track_id == 2]
+        return None
+
+    @property
+    def target_track_id(self) -> int | None:
+        if not self.reports or self.j >= 10:
+            return None
+        return 2 if self.j >= 8 else 1
+
+
+def test_a_change_of_the_target_track_is_an_event(tmp_path):
+    rec, m, _ = _run(tmp_path, tracker=SwitchingTracker())
+    changes = [e for e in rec.events if e["type"] == "target_track_changed"]
+    assert [(e["tick"], e["uav"], e["from_track"], e["to_track"], e["from_alive"]) for e in changes] == [
+        (DIV * 3, 0, None, 1, False),  # acquired at step 2
+        (DIV * 9, 0, 1, 2, True),  # step 8: another live track
+        (DIV * 11, 0, 2, None, True)]  # step 10: none (track 2 still lives)
+    assert changes[0]["p"] == 0.9 and (changes[0]["x"], changes[0]["y"]) == (2.0, 0.0)
+    assert changes[1]["p"] == 0.1 and (changes[1]["x"], changes[1]["y"]) == (0.0, 3.0)  # track 2 on c0 since step 7
+    assert changes[2]["p"] is None and changes[2]["x"] is None
+    assert m["uavs"]["a"]["target_track_changes"] == 3 and "target_track_changes" not in m["uavs"]["b"]
+    assert m["events"]["target_track_changed"] == 3

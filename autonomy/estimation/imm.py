@@ -27,7 +27,7 @@ import numpy as np
 
 from autonomy.estimation.base import TIME_TOLERANCE, Filter, GaussianFilter, Innovation
 from autonomy.estimation.measurements import MeasurementLike, MeasurementModel, measurement_model
-from autonomy.estimation.models import LinearMotionModel
+from autonomy.estimation.models import LinearMotionModel, Stopped
 
 __all__ = ["IMM", "MoveStopSwitching", "cv_ct_imm", "move_stop_imm", "switching_matrix"]
 
@@ -268,7 +268,6 @@ def move_stop_imm(x0: np.ndarray, P0: np.ndarray, t0: float, *, moving: LinearMo
     velocity of noise (the moving model alone lets a radar-only track of a stopped car wander by the radar's
     cross-range error). ``filter_kwargs`` go to each mode's filter (e.g. an EKF's ``iterations``)."""
     from autonomy.estimation.factory import make_filter
-    from autonomy.estimation.models import Stopped
 
     switching = MoveStopSwitching(mean_moving_s, mean_stopped_s)
     models = [moving, Stopped(layout_of=moving.layout, q=stopped_q)]

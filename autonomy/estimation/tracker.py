@@ -199,16 +199,16 @@ class ConfiguredFilters:
     def __call__(self, x0: np.ndarray, P0: np.ndarray, t0: float) -> Filter:
         """The filter started from ``(x0, P0)`` at ``t0`` (s)."""
         cfg = self.config
+        iterations = {"iterations": cfg.ekf_iterations} if cfg.ekf_iterations > 1 else {}
         if cfg.filter == "imm" and cfg.imm_modes == "move_stop":
-            iterations = {"iterations": cfg.ekf_iterations} if cfg.ekf_iterations > 1 else {}
             return move_stop_imm(x0, P0, t0, moving=self.model, mean_moving_s=cfg.imm_mean_moving_s,
                                  mean_stopped_s=cfg.imm_mean_stopped_s, stopped_q=cfg.imm_stopped_q,
                                  target_height=cfg.target_height, **iterations)
         if cfg.filter == "imm":
             return cv_ct_imm(x0, P0, t0, q_cv=cfg.q, q_ct=cfg.imm_q_turn, turn_rate=cfg.imm_turn_rate,
                              p_stay=cfg.imm_p_stay, target_height=cfg.target_height)
-        extra = {"iterations": cfg.ekf_iterations} if cfg.filter == "ekf" and cfg.ekf_iterations > 1 else {}
-        return make_filter(cfg.filter, self.model, x0, P0, t0, target_height=cfg.target_height, **extra)
+        return make_filter(cfg.filter, self.model, x0, P0, t0, target_height=cfg.target_height,
+                           **(iterations if cfg.filter == "ekf" else {}))
 
 
 class SingleTargetTracker(Tracker):

@@ -75,19 +75,15 @@ def track_picture(estimator: object, t: float) -> TrackPicture | None:
                         target_track_id=estimator.target_track_id)
 
 
-def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate], threshold: float,
-                     q_own: Sequence[float] | None = None, q_other: Sequence[float] | None = None,
-                     ) -> list[tuple[int, int]]:
+def associate_tracks(own: Sequence[TargetEstimate], other: Sequence[TargetEstimate],
+                     threshold: float) -> list[tuple[int, int]]:
     """Pairs ``(i, j)`` of ``own[i]`` and ``other[j]`` (estimates at one time) that are one car: among the pairs whose
     Mahalanobis position distance is under ``threshold`` (χ², 2 degrees of freedom), the most pairs, and of those
-    the assignment of least total distance plus :func:`~.track_sets.identity_cost` of the tracks' target
-    probabilities ``q_own`` and ``q_other`` (None: all 0)."""
+    the assignment of least total distance."""
     if not own or not other:
         return []
     return associate_positions(np.array([e.p_W[:2] for e in own]), np.array([e.P[:2, :2] for e in own]),
-                               np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold,
-                               None if q_own is None else np.asarray(q_own, dtype=float),
-                               None if q_other is None else np.asarray(q_other, dtype=float))
+                               np.array([e.p_W[:2] for e in other]), np.array([e.P[:2, :2] for e in other]), threshold)
 
 
 def associate_positions(pa: np.ndarray, Pa: np.ndarray, pb: np.ndarray, Pb: np.ndarray, threshold: float,

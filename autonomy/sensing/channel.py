@@ -333,13 +333,7 @@ class Channel:
     def link_matrix(self, nodes: Sequence[str], positions: Mapping[str, np.ndarray], tick: int) -> np.ndarray:
         """(N, N) symmetric delivery probabilities between ``nodes`` at ``tick`` (diagonal 1)."""
         nodes = tuple(nodes)
-        pts = _points(nodes, positions)
-        iu, ju = np.triu_indices(len(nodes), k=1)
-        P = np.eye(len(nodes))
-        P[iu, ju] = P[ju, iu] = self._pair_probabilities(pts[iu], pts[ju])
-        P[~scheduled_links(nodes, self.config.links, self._outages, tick)] = 0.0
-        np.fill_diagonal(P, 1.0)
-        return P
+        return self.link_matrices(nodes, _points(nodes, positions)[None], [tick])[0]
 
     def link_matrices(self, nodes: Sequence[str], positions: np.ndarray, ticks: Sequence[int]) -> np.ndarray:
         """(T, N, N) :meth:`link_matrix` at each of ``ticks`` (T,) with the ``nodes``' positions (T, N, 3) m there:

@@ -132,11 +132,9 @@ class FakeScene:
         self.buildings = tuple(buildings)
         self.boxes = tuple(boxes)
         self.ground_z = float(ground_z)
-        self._prisms = [(i, pr) for i, b in enumerate(self.buildings) for pr in convex_prisms(b)]
+        self._of_building = [convex_prisms(b) for b in self.buildings]
+        self._prisms = [(i, pr) for i, prisms in enumerate(self._of_building) for pr in prisms]
         self._box_prisms = [(j, pr) for j, bx in enumerate(self.boxes) for pr in convex_prisms(bx.as_building())]
-        self._of_building: list[list[_Prism]] = [[] for _ in self.buildings]
-        for i, pr in self._prisms:
-            self._of_building[i].append(pr)
         fp = [np.asarray(b.footprint, dtype=float) for b in self.buildings]
         self._lo = np.array([f.min(axis=0) for f in fp]).reshape(-1, 2)  # footprint bounding boxes
         self._hi = np.array([f.max(axis=0) for f in fp]).reshape(-1, 2)

@@ -60,10 +60,11 @@ RUN_MATCH_RADIUS_M = 50.0
 range noise of the shipped GMTI radars (20-30 m), so that an estimate on the right car is not counted as lost for its
 noise, and about half the typical spacing of cars in the shipped towns (so a wrong car is not counted as right)."""
 
-_MOT_RESCORE = 2.0
-"""Partial metrics rescore a tracker's MOT block once its steps have doubled (scoring is linear in the steps, so a
-run's partial flushes together cost at most its final scoring: 1.25 made them cost five times it, the largest share of
-a city run's loop after the tracking itself; a partial file's MOT block may lag the rest by up to half the run)."""
+_MOT_RESCORE = 4.0
+"""Partial metrics rescore a tracker's MOT block once its steps have grown fourfold. A scoring costs ≈ 25 ms plus
+≈ 2 ms per step of 200 vehicles (motmetrics builds its event tables anew each time), so a run's partial flushes together
+cost less than its final scoring (2.0 made them cost about twice it in a 30 s city run: 1.25 five times); a partial
+file's MOT block may lag the rest by up to three quarters of the run, and says how many steps it scored."""
 
 
 class _Errors:

@@ -21,12 +21,14 @@ HOTA (Luiten et al. 2021) is not reported: motmetrics 1.4 does not compute it, a
 GUI build of OpenCV on PyPI (it conflicts with the headless build the camera uses).
 
 The steps are stored as they come and scored only when :meth:`ClearMot.summary` is asked (the accumulator is fed the
-steps added since the previous call), so adding a step costs a few array copies. motmetrics (and pandas) are imported
-at the first summary, not with this module.
+steps added since the previous call), so adding a step costs a few array copies. motmetrics (and pandas, about half
+a second) are imported when the first scorer is made, not with this module: a run makes its scorers while it is set
+up, so the import is not paid inside its loop.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -112,6 +114,7 @@ class ClearMot:
         self._acc: Any = None  # motmetrics.MOTAccumulator, built at the first summary
         self._fed = 0
         self._gospa: list[float] = []
+        _motmetrics()
 
     @property
     def steps(self) -> int:
@@ -138,8 +141,7 @@ class ClearMot:
             return MotSummary(steps=0, match_radius_m=r, mota=nan, motp_m=nan, idf1=nan, num_switches=0,
                               mostly_tracked=0, mostly_lost=0, false_positives=0, misses=0, truth_instances=0,
                               matches=0, gospa_mean_m=nan)
-        import motmetrics as mm  # pandas with it: a second to import, so only where something is scored
-
+        mm = _motmetrics()
         if self._acc is None:
             self._acc = mm.MOTAccumulator(auto_id=False)
         for k in range(self._fed, len(self._steps)):
@@ -149,13 +151,26 @@ class ClearMot:
             self._acc.update(gt_ids.tolist(), hyp_ids.tolist(), d, frameid=k)
             self._gospa.append(gospa(gt_xy, hyp_xy, c=r, p=2.0).distance)
         self._fed = len(self._steps)
-        s = mm.metrics.create().compute(self._acc, metrics=list(_METRICS), return_dataframe=False)
+        s = _metrics_host().compute(self._acc, metrics=list(_METRICS), return_dataframe=False)
         return MotSummary(steps=len(self._steps), match_radius_m=r, mota=float(s["mota"]), motp_m=float(s["motp"]),
                           idf1=float(s["idf1"]), num_switches=int(s["num_switches"]),
                           mostly_tracked=int(s["mostly_tracked"]), mostly_lost=int(s["mostly_lost"]),
                           false_positives=int(s["num_false_positives"]), misses=int(s["num_misses"]),
                           truth_instances=int(s["num_objects"]), matches=int(s["num_detections"]),
                           gospa_mean_m=float(np.mean(self._gospa)))
+
+
+def _motmetrics() -> Any:
+    """The motmetrics module (imported at the first call)."""
+    import motmetrics
+
+    return motmetrics
+
+
+@functools.cache
+def _metrics_host() -> Any:
+    """motmetrics' host of the standard metrics, made once (registering them costs ≈ 10 ms)."""
+    return _motmetrics().metrics.create()
 
 
 def _ids_and_points(what: str, ids: Sequence[int], xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

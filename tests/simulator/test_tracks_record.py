@@ -144,12 +144,12 @@ def test_mot_metrics_of_the_confirmed_tracks_against_every_car(tmp_path):
 
 
 def test_partial_metrics_are_safe_and_rescored_as_the_steps_grow(tmp_path):
-    # steps done by tick: 3 → 1, 6 → 2 (rescored: 2 · 1), 24 → 8 (rescored), 27 → 9 and 30 → 10 (< 2 · 8: kept)
-    _, final, partial = _run(tmp_path, partial_at=(2, 3, 6, 24, 27, 30))
+    # steps done by tick: 3 → 1, 6 → 2 (< 4 · 1: kept), 12 → 4 (rescored), 24 → 8, 27 → 9 and 30 → 10 (< 4 · 4: kept)
+    _, final, partial = _run(tmp_path, partial_at=(2, 3, 6, 12, 24, 27, 30))
     assert "targets" not in partial[2] and "mot" not in partial[2]["uavs"]["a"]  # before any agent step
     assert partial[3]["targets"]["c0"]["a"]["identity_fraction"] == 0.0
     assert partial[3]["uavs"]["a"]["mot"]["steps"] == 1 and partial[3]["uavs"]["a"]["mot"]["mota"] == 0.0
-    assert [partial[k]["uavs"]["a"]["mot"]["steps"] for k in (6, 24, 27, 30)] == [2, 8, 8, 8]
+    assert [partial[k]["uavs"]["a"]["mot"]["steps"] for k in (6, 12, 24, 27, 30)] == [1, 4, 4, 4, 4]
     assert partial[24]["targets"]["c0"]["a"]["losses"] == 1  # step 7 (tick 24) already off the target
     assert final["uavs"]["a"]["mot"]["steps"] == 12 and final["targets"]["c0"]["a"]["identity_fraction"] == 5 / 12
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from interfaces._checks import finite_number, finite_vector
+from interfaces._checks import all_finite, finite_number, finite_vector
 
 __all__ = ["OwnState", "TargetEstimate", "TeammateState", "TrackPicture", "TrackReport"]
 
@@ -87,7 +87,7 @@ class TargetEstimate:
         if self.P is not None:
             P = np.array(self.P, dtype=float)
             n = 2 * p.shape[0]
-            if P.shape != (n, n) or not np.isfinite(P).all():
+            if P.shape != (n, n) or not all_finite(P):
                 raise ValueError(f"TargetEstimate.P must be a finite ({n}, {n}) array, got shape {P.shape}")
             P.setflags(write=False)
             object.__setattr__(self, "P", P)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from interfaces._checks import all_finite
 from interfaces.state import OwnState, TargetEstimate, TeammateState
 
 
@@ -29,3 +30,21 @@ def test_states_hold_read_only_float_copies():
     assert own.speed == 5.0 and own.course(min_speed=0.5) == pytest.approx(np.arctan2(4.0, 3.0))
     est = TargetEstimate(t=0.0, p_W=[0, 0], v_W=[1, 0], P=np.eye(4))
     assert not est.P.flags.writeable and est.predict_xy(np.array([1.0, 2.0])).tolist() == [[1.0, 0.0], [2.0, 0.0]]
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_all_finite_finds_one_bad_entry_anywhere(bad):
+    for shape in [(1,), (4,), (4, 4), (6, 6), (40,)]:  # small ones as a list of floats, larger ones by numpy
+        arr = np.full(shape, 3.0)
+        assert all_finite(arr)
+        for k in range(arr.size):
+            a = arr.copy().reshape(-1)
+            a[k] = bad
+            assert not all_finite(a.reshape(shape))
+    huge = np.array([1e200, -1e300, 1.7e308])
+    assert all_finite(huge)
+    assert not all_finite(np.r_[huge, bad])
+    assert all_finite(np.zeros(0))
+    with pytest.raises(ValueError, match="P must be a finite"):
+        TargetEstimate(t=0.0, p_W=np.zeros(2), v_W=np.zeros(2), P=np.diag([1.0, 1.0, 1.0, bad]))
+    assert TargetEstimate(t=0.0, p_W=np.array([1e200, 0.0]), v_W=np.zeros(2)).p_W[0] == 1e200

@@ -343,26 +343,39 @@ class SumoTraffic:
         """(skytrack road id, arc length, lateral offset, stopped) per slot at ``tick``; road ``""`` when inactive.
 
         The road is the one SUMO has the vehicle on at the nearer step; inside a junction (SUMO's internal lanes)
-        it is the nearest road. Arc length and offset are the projection of the pose onto that road, kept per slot
-        while the slot's edge and position stay the same to the bit (vehicles waiting at junctions)."""
+        it is the nearest road. Arc length and offset are the projection of the pose onto that road (all slots that
+        moved in one compiled call: :meth:`~worlds.roads.network.RoadNetwork.project_on` and ``nearest_many``), kept
+        per slot while the slot's edge and position stay the same to the bit (vehicles waiting at junctions)."""
         ps = self.poses(tick)
         edges = self._slots.roads_at((tick - self._t_prev) / self.config.period)
         n = self.config.n_slots
         road_ids, s, lat = [""] * n, np.zeros(n), np.zeros(n)
         memo = self._road_memo
+        on_road: list[tuple[int, str]] = []  # (slot, road) of the slots SUMO has on a road's edge, to project
+        loose: list[int] = []  # slots inside junctions, for the nearest road
+        xs, ys = ps.xy[:, 0].tolist(), ps.xy[:, 1].tolist()
         for k in np.flatnonzero(ps.active).tolist():
-            x, y = float(ps.xy[k, 0]), float(ps.xy[k, 1])
             kept = memo.get(k)
-            if kept is not None and kept[0] == edges[k] and kept[1] == x and kept[2] == y:
+            if kept is not None and kept[0] == edges[k] and kept[1] == xs[k] and kept[2] == ys[k]:
                 road_ids[k], s[k], lat[k] = kept[3], kept[4], kept[5]
                 continue
             rid = self.net.road_of(edges[k])
             if rid:
-                s[k], lat[k] = self.network.roads[rid].project(ps.xy[k])
+                on_road.append((k, rid))
             else:
-                rid, s[k], lat[k] = self.network.nearest(ps.xy[k])
-            road_ids[k] = rid
-            memo[k] = (edges[k], x, y, rid, float(s[k]), float(lat[k]))
+                loose.append(k)
+        if on_road:  # one compiled call for every slot (a city's worth of Road.project)
+            idx = np.array([k for k, _ in on_road])
+            s[idx], lat[idx] = self.network.project_on([r for _, r in on_road], ps.xy[idx])
+            for k, rid in on_road:
+                road_ids[k] = rid
+        if loose:
+            idx = np.array(loose)
+            ids, s[idx], lat[idx] = self.network.nearest_many(ps.xy[idx])
+            for k, rid in zip(loose, ids, strict=True):
+                road_ids[k] = rid
+        for k in (*(k for k, _ in on_road), *loose):
+            memo[k] = (edges[k], xs[k], ys[k], road_ids[k], float(s[k]), float(lat[k]))
         return road_ids, s, lat, ps.active & (ps.speed < _STOPPED_SPEED)
 
     def pop_events(self) -> list[dict]:

@@ -7,7 +7,7 @@ centre-line (the dividing line), each with its lanes on its own right.
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -15,6 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from worlds.roads.projection import RoadTables, project_pairs
 from worlds.roads.road import Road
 
 __all__ = ["RoadNetwork", "street_road_ids"]
@@ -65,6 +66,8 @@ class RoadNetwork:
             self._out[road.start_node].append(road.id)
         self._ids = list(self.roads)
         self._index: tuple[cKDTree, np.ndarray] | None = None
+        self._tables: RoadTables | None = None  # every road's table end to end, for the batch projections
+        self._rank = {rid: k for k, rid in enumerate(self._ids)}
 
     def _check_road(self, road: Road) -> None:
         ends = (("start_node", road.start_node, road.vertices[0]), ("end_node", road.end_node, road.vertices[-1]))
@@ -210,6 +213,41 @@ class RoadNetwork:
                 best = key
         assert best is not None
         return best[2], best[3], best[4]
+
+    def project_on(self, road_ids: Sequence[str], points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(s, lateral) of each of the (P, 2) ``points`` (m) projected onto the road ``road_ids[i]``: what
+        :meth:`Road.project` gives, to within 1e-9 m, in one compiled call (:mod:`worlds.roads.projection`)."""
+        s, lat, _ = project_pairs(self._road_tables(), np.array([self._rank[r] for r in road_ids], dtype=np.int64),
+                                  points)
+        return s, lat
+
+    def nearest_many(self, points: np.ndarray) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """:meth:`nearest` of each of the (P, 2) ``points`` (m): road ids, arc lengths and lateral offsets, with the
+        candidates of :meth:`nearest` projected in one compiled call (the same roads; s and lateral within 1e-9 m)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if len(pts) == 0:
+            return [], np.zeros(0), np.zeros(0)
+        if not self.roads:
+            raise ValueError("nearest: the network has no roads")
+        tree, owner = self._search_index()
+        d0, _ = tree.query(pts)
+        near = tree.query_ball_point(pts, d0 + _SEARCH_SPACING / 2 + 1e-9)
+        cands = [sorted(set(owner[c].tolist())) for c in near]
+        point_of = np.repeat(np.arange(len(pts)), [len(c) for c in cands])
+        road_of = np.fromiter((k for c in cands for k in c), dtype=np.int64, count=len(point_of))
+        s, lat, dist = project_pairs(self._road_tables(), road_of, pts[point_of])
+        best: list[tuple | None] = [None] * len(pts)
+        for i, k, si, li, di in zip(point_of.tolist(), road_of.tolist(), s.tolist(), lat.tolist(), dist.tolist(),
+                                    strict=True):
+            key = (round(di, 6), 0 if li <= 0 else 1, self._ids[k], si, li)
+            if best[i] is None or key[:3] < best[i][:3]:
+                best[i] = key
+        return [b[2] for b in best], np.array([b[3] for b in best]), np.array([b[4] for b in best])
+
+    def _road_tables(self) -> RoadTables:
+        if self._tables is None:
+            self._tables = RoadTables.of([self.roads[rid] for rid in self._ids])
+        return self._tables
 
     def _search_index(self) -> tuple[cKDTree, np.ndarray]:
         if self._index is None:

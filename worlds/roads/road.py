@@ -42,7 +42,7 @@ from worlds.roads.spline import knots, line_table, spline_table
 __all__ = ["Road"]
 
 _MIN_CHORD = 1e-6  # m; consecutive vertices closer than this are rejected as duplicates
-_MAX_PROJECT_STEPS = 8
+MAX_PROJECT_STEPS = 8
 _PROJECT_CHUNK = 256  # points per block of the nearest-sample search in project_many
 
 
@@ -241,7 +241,7 @@ class Road:
     def _refine(self, px: float, py: float, s: float, x: float, y: float, th: float, ka: float) -> tuple[float, float]:
         """Osculating-circle steps from the centre-line state (s, x, y, th, ka) to the foot point of (px, py)."""
         lat = 0.0
-        for _ in range(_MAX_PROJECT_STEPS):
+        for _ in range(MAX_PROJECT_STEPS):
             c, sn = math.cos(th), math.sin(th)
             a = (px - x) * c + (py - y) * sn
             lat = -(px - x) * sn + (py - y) * c
@@ -271,7 +271,7 @@ class Road:
             j[c:c + _PROJECT_CHUNK] = np.argmin(np.einsum("ijk,ijk->ij", d, d), axis=1)
         s = j * self._h
         x, y, th, ka = self._xy[j, 0], self._xy[j, 1], self._th[j], self._ka[j]
-        for _ in range(_MAX_PROJECT_STEPS):
+        for _ in range(MAX_PROJECT_STEPS):
             dx, dy = px - x, py - y
             a = dx * np.cos(th) + dy * np.sin(th)
             lat = -dx * np.sin(th) + dy * np.cos(th)

@@ -106,7 +106,8 @@ def prepare(loaded: LoadedWorld, clock: Clock, seeds: RunSeeds, options: RunOpti
             _check_information_tracker(loaded, i, estimator, f.method)
             estimator = InformationReporter(estimator)
         elif f.method not in ("none", "measurements", "sets"):
-            fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
+            fusion = TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q,
+                                                   switch_margin=f.switch_margin))
         agents.append(AgentSlot(uav=i, agent=Agent(u.id, estimator, guidance, fusion=fusion),
                                 divisor=clock.divisor(u.autonomy.rate_hz, f"uavs[{i}].autonomy.rate_hz")))
     return Prepared(loaded=loaded, clock=clock, geometry=geometry, sensors=sensors, agents=agents, hcmci=hcmci)

@@ -351,6 +351,9 @@ class FusionSpec(Strict):
     method: str = Field("none", description="the fusion method: a tag of worlds.variants.FUSIONS")
     max_age_s: PositiveFloat = Field(2.0, description="shared estimates older than this are ignored, s")
     q: NonNegFloat = Field(1.0, description="white-acceleration density used to age shared estimates, m^2/s^3")
+    switch_margin: float = Field(0.0, ge=0.0, lt=1.0, description="among traffic (convex, covariance_intersection): "
+                                 "team probability by which another candidate must beat the team's target of the "
+                                 "previous step to be taken instead (0: the most probable at every step)")
     rounds: int = Field(3, ge=1, description="hcmci: consensus iterations L per step")
     b: float | Literal["safe"] = Field("safe", description="hcmci: gain on the averaged measurement information, "
                                                            "'safe' (no measurement counted twice) or a number > 0 "

@@ -118,10 +118,13 @@ class TeamTrackFusion:
         Probability of the association gate, in (0, 1).
     min_probability : float
         Team probability the target candidate needs besides beating "in no track", in [0, 1].
+    switch_margin : float
+        Team probability by which another candidate must beat the own track chosen at the previous step to be taken
+        instead, in [0, 1) (0: the most probable candidate at every step).
     """
 
     def __init__(self, method: str, max_age_s: float, q: float, gate_probability: float = 0.999,
-                 min_probability: float = 0.0) -> None:
+                 min_probability: float = 0.0, switch_margin: float = 0.0) -> None:
         if method not in ("convex", "covariance_intersection"):
             raise ValueError(f"TeamTrackFusion.method must be convex|covariance_intersection, got {method!r}")
         if not 0 < gate_probability < 1:
@@ -131,6 +134,10 @@ class TeamTrackFusion:
         self.q = float(q)
         self.threshold = float(2.0 * gammaincinv(1.0, gate_probability))
         self.min_probability = float(min_probability)
+        if not 0.0 <= switch_margin < 1.0:
+            raise ValueError(f"TeamTrackFusion.switch_margin must be in [0, 1), got {switch_margin!r}")
+        self.switch_margin = float(switch_margin)
+        self._kept: int | None = None  # one's own track chosen at the previous step
         self.associated = 0
         self.disagreements = 0  # steps where the team's target was not one's own target track
 
@@ -168,10 +175,18 @@ class TeamTrackFusion:
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1
         p_own = float(pooled[best_own]) / members if best_own >= 0 else 0.0
         p_loose = loose[best_loose][0] * (1.0 + own_none) / members if best_loose >= 0 else 0.0
+        kept = next((k for k, r in enumerate(mine) if r.track_id == self._kept), None) if self.switch_margin else None
+        if kept is not None:
+            p_kept = float(pooled[kept]) / members
+            if (p_kept + self.switch_margin >= max(p_own, p_loose) and p_kept >= self.min_probability
+                    and p_kept > none / members):
+                best_own, p_own, p_loose = kept, p_kept, 0.0  # not beaten by the margin: kept
         best = max(p_own, p_loose)
+        self._kept = None
         if best < self.min_probability or best <= none / members:
             return TeamTarget(estimate=local, probability=max(p_own, p_loose), own_track_id=None, fused_with=0)
         if p_own >= p_loose:
+            self._kept = mine[best_own].track_id
             track_id = mine[best_own].track_id
             if track_id != own_target:
                 self.disagreements += 1

@@ -35,11 +35,15 @@ class TrackFusionConfig:
         Shared estimates older than this are ignored (s), > 0.
     q : float
         White-acceleration spectral density used to age shared estimates (m²/s³), >= 0.
+    switch_margin : float
+        Among traffic: team probability by which another candidate must beat the own track taken for the team's
+        target at the previous step to be taken instead, in [0, 1) (:class:`~.track_association.TeamTrackFusion`).
     """
 
     method: Literal["convex", "covariance_intersection"] = "convex"
     max_age_s: float = 2.0
     q: float = 1.0
+    switch_margin: float = 0.0
 
     def __post_init__(self) -> None:
         if self.method not in ("convex", "covariance_intersection"):
@@ -48,6 +52,8 @@ class TrackFusionConfig:
             raise ValueError(f"TrackFusionConfig.max_age_s must be > 0 s, got {self.max_age_s}")
         if not self.q >= 0:
             raise ValueError(f"TrackFusionConfig.q must be >= 0, got {self.q}")
+        if not 0 <= self.switch_margin < 1:
+            raise ValueError(f"TrackFusionConfig.switch_margin must be in [0, 1), got {self.switch_margin}")
 
 
 def predict_estimate(est: TargetEstimate, t: float, q: float) -> TargetEstimate:
@@ -170,7 +176,7 @@ class TrackFusion:
 
         self.config = config
         self.fusions = 0
-        self.team = TeamTrackFusion(config.method, config.max_age_s, config.q)
+        self.team = TeamTrackFusion(config.method, config.max_age_s, config.q, switch_margin=config.switch_margin)
         self.team_track_id: int | None = None  # one's own track the last fuse_tracks took for the team's target
 
     def fuse_tracks(self, t: float, local: TargetEstimate | None, own: Sequence[TrackReport], own_target: int | None,

@@ -328,7 +328,8 @@ def recorded_case(run_dir: str | Path) -> ReplayCase:
 
     def fusion(index: int) -> Any:
         f = world.uavs[index].autonomy.fusion
-        return TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q))
+        return TrackFusion(TrackFusionConfig(method=f.method, max_age_s=f.max_age_s, q=f.q,
+                                                   switch_margin=f.switch_margin))
 
     return ReplayCase(network=network, times=times, scans=scans, truth=_car_truth(run_dir, ticks[0]), estimator=make,
                       fusion=fusion, accel_rms=car_accel_rms(run_dir))

@@ -72,6 +72,36 @@ def test_stale_pictures_are_ignored_and_no_candidate_keeps_the_local_estimate():
     assert out.estimate is local and out.fused_with == 0
 
 
+def test_a_switch_margin_keeps_the_team_target_through_near_ties():
+    """Own tracks 1 and 2 with a teammate's on each car: the team's probabilities (p_own + p_mate) / 2 swap their
+    order by 0.02 from step to step. With no margin the choice follows every swap; with 0.1 it keeps track 2 until
+    track 1 beats it by more than 0.1; a kept track that is gone is replaced by the most probable."""
+    def pictures(p1, p2, m1, m2):
+        own = [_rep(1, 0, 0, p=p1), _rep(2, 200, 0, p=p2)]
+        return own, [TrackPicture(t=10.0, tracks=(_rep(7, 1, 0, p=m1), _rep(8, 201, 0, p=m2)), target_track_id=8)]
+
+    steps = [(0.45, 0.47, 0.45, 0.47), (0.48, 0.46, 0.48, 0.46), (0.45, 0.47, 0.45, 0.47), (0.55, 0.40, 0.55, 0.40),
+             (0.62, 0.30, 0.62, 0.30)]
+    plain, sticky = (TeamTrackFusion("convex", max_age_s=2.0, q=0.0, switch_margin=m) for m in (0.0, 0.1))
+    chosen = {id(f): [] for f in (plain, sticky)}
+    for probs in steps:
+        own, mates = pictures(*probs)
+        for f in (plain, sticky):
+            chosen[id(f)].append(f.fuse(10.0, own[0].estimate, own, None, mates).own_track_id)
+    assert chosen[id(plain)] == [2, 1, 2, 1, 1]
+    assert chosen[id(sticky)] == [2, 2, 2, 1, 1]  # 0.55 - 0.40 = 0.15 > 0.1 at the fourth step
+    # the kept track gone: the most probable one
+    own = [_rep(3, 400, 0, p=0.2), _rep(4, 600, 0, p=0.5)]
+    assert sticky.fuse(10.0, own[0].estimate, own, None, []).own_track_id == 4
+    # then 4 kept within the margin of 3, and given up beyond it
+    assert sticky.fuse(10.0, own[0].estimate, [_rep(3, 400, 0, p=0.52), _rep(4, 600, 0, p=0.45)], None,
+                       []).own_track_id == 4
+    assert sticky.fuse(10.0, own[0].estimate, [_rep(3, 400, 0, p=0.58), _rep(4, 600, 0, p=0.40)], None,
+                       []).own_track_id == 3
+    with pytest.raises(ValueError, match="switch_margin"):
+        TeamTrackFusion("convex", max_age_s=2.0, q=0.0, switch_margin=1.0)
+
+
 class _Tracks:
     """A multi-target estimator that holds two tracks and believes track 1 is the target; it keeps the team's
     choice it is given (``team_target``), as the built-in tracker does."""

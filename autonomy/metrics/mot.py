@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.metrics.multi_target import gospa
+from autonomy.metrics.multi_target import gospa_of_pairs, pairs_within
 
 __all__ = ["DEFAULT_MATCH_RADIUS_M", "ClearMot", "MotSummary", "check_match_radius"]
 
@@ -146,10 +146,11 @@ class ClearMot:
             self._acc = mm.MOTAccumulator(auto_id=False)
         for k in range(self._fed, len(self._steps)):
             _, gt_ids, gt_xy, hyp_ids, hyp_xy = self._steps[k]
-            d = np.linalg.norm(gt_xy[:, None, :] - hyp_xy[None, :, :], axis=-1)
-            d[d > r] = np.nan  # motmetrics: NaN is "cannot match"
+            i, j, dij = pairs_within(gt_xy, hyp_xy, r)  # a k-d tree: a city's vehicles are mostly far from a track
+            d = np.full((len(gt_ids), len(hyp_ids)), np.nan)  # motmetrics: NaN is "cannot match"
+            d[i, j] = dij
             self._acc.update(gt_ids.tolist(), hyp_ids.tolist(), d, frameid=k)
-            self._gospa.append(gospa(gt_xy, hyp_xy, c=r, p=2.0).distance)
+            self._gospa.append(gospa_of_pairs(len(gt_ids), len(hyp_ids), i, j, dij, c=r, p=2.0).distance)
         self._fed = len(self._steps)
         s = _metrics_host().compute(self._acc, metrics=list(_METRICS), return_dataframe=False)
         return MotSummary(steps=len(self._steps), match_radius_m=r, mota=float(s["mota"]), motp_m=float(s["motp"]),

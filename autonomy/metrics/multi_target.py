@@ -6,8 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
-__all__ = ["ospa", "GospaResult", "gospa"]
+__all__ = ["ospa", "GospaResult", "gospa", "gospa_of_pairs", "pairs_within"]
 
 
 def _cut_distances(X: np.ndarray, Y: np.ndarray, c: float, p: float) -> np.ndarray:
@@ -74,24 +77,62 @@ def gospa(truth: np.ndarray, estimates: np.ndarray, c: float, p: float = 2.0) ->
 
     Pairs farther apart than ``c`` are better left unassigned (each costs ``c^p/2``, as much as leaving both points
     unassigned): with ``D = min(‖x − y‖^p, c^p)``, the best assignment is a maximum matching of least
-    ``Σ (D − c^p)``, solved as a rectangular assignment among the points that have some partner nearer than ``c``
-    (a point without one is unassigned in every best assignment); its pairs with ``D < c^p`` are the assigned ones.
+    ``Σ (D − c^p)`` over the pairs nearer than ``c`` (:func:`gospa_of_pairs`), which a k-d tree finds.
     """
     _check(c, p)
     X, Y = _as_points(truth), _as_points(estimates)
-    m, n = len(X), len(Y)
+    i, j, d = pairs_within(X, Y, c)
+    return gospa_of_pairs(len(X), len(Y), i, j, d, c, p)
+
+
+def pairs_within(X: np.ndarray, Y: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(i, j, d): the pairs of rows of ``X`` (m, k) and ``Y`` (n, k) at most ``radius`` apart, sorted by (i, j), and
+    their distances ``d = ‖X[i] − Y[j]‖`` (the same numbers as ``np.linalg.norm(X[:, None] − Y[None], axis=-1)``)."""
+    X, Y = _as_points(X), _as_points(Y)
+    if len(X) == 0 or len(Y) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+    near = cKDTree(X).query_ball_tree(cKDTree(Y), r=radius * (1.0 + 1e-9) + 1e-12)  # the tree's own rounding aside
+    i = np.repeat(np.arange(len(X)), [len(c) for c in near])
+    j = np.fromiter((k for c in near for k in sorted(c)), dtype=np.int64, count=len(i))
+    d = np.linalg.norm(X[i] - Y[j], axis=-1)
+    keep = d <= radius
+    return i[keep], j[keep], d[keep]
+
+
+def gospa_of_pairs(m: int, n: int, i: np.ndarray, j: np.ndarray, d: np.ndarray, c: float,
+                   p: float = 2.0) -> GospaResult:
+    """:func:`gospa` of ``m`` truths and ``n`` estimates given every pair ``(i, j)`` nearer than ``c`` with its
+    distance ``d`` (pairs at ``c`` or beyond may be given too; they are never assigned). The least-cost matching
+    splits over the connected clusters of those pairs: each is a rectangular assignment of ``D − c^p`` (0 off the
+    pairs, i.e. unassigned) solved alone, most of them a single pair among traffic."""
+    _check(c, p)
     half = c**p / 2.0
-    if m == 0 or n == 0:
-        return GospaResult(distance=float(((m + n) * half) ** (1.0 / p)), localisation=0.0, missed=m, false=n)
-    D = np.minimum(np.linalg.norm(X[:, None, :] - Y[None, :, :], axis=-1) ** p, 2.0 * half)
+    D = np.minimum(np.asarray(d, dtype=float) ** p, 2.0 * half)
     near = D < 2.0 * half
-    rows, cols = np.flatnonzero(near.any(axis=1)), np.flatnonzero(near.any(axis=0))
-    loc, k = 0.0, 0
-    if len(rows):
-        sub = D[np.ix_(rows, cols)]
-        r, col = linear_sum_assignment(sub - 2.0 * half)
-        pairs = sorted((int(rows[i]), int(cols[j])) for i, j in zip(r, col, strict=True) if sub[i, j] < 2.0 * half)
-        loc, k = float(sum(D[i, j] for i, j in pairs)), len(pairs)
+    i, j, D = np.asarray(i)[near], np.asarray(j)[near], D[near]
+    pairs: list[tuple[int, int, float]] = []
+    if len(D):
+        _, label = connected_components(coo_matrix((np.ones(len(D)), (i, m + j)), shape=(m + n, m + n)),
+                                        directed=False)
+        comp = label[i]
+        order = np.argsort(comp, kind="stable")
+        bounds = np.flatnonzero(np.diff(comp[order])) + 1
+        for idx in np.split(order, bounds):
+            if len(idx) == 1:
+                k = int(idx[0])
+                pairs.append((int(i[k]), int(j[k]), float(D[k])))
+                continue
+            rows, r_at = np.unique(i[idx], return_inverse=True)
+            cols, c_at = np.unique(j[idx], return_inverse=True)
+            sub = np.zeros((len(rows), len(cols)))
+            sub[r_at, c_at] = D[idx] - 2.0 * half
+            r, col = linear_sum_assignment(sub)
+            full = np.full((len(rows), len(cols)), 2.0 * half)
+            full[r_at, c_at] = D[idx]
+            pairs += [(int(rows[a]), int(cols[b]), float(full[a, b])) for a, b in zip(r, col, strict=True)
+                      if full[a, b] < 2.0 * half]
+    pairs.sort()
+    loc, k = float(sum(v for _, _, v in pairs)), len(pairs)
     missed, false = m - k, n - k
     total = loc + half * (missed + false)
     return GospaResult(distance=float(total ** (1.0 / p)), localisation=loc, missed=missed, false=false)

@@ -118,6 +118,29 @@ def test_gospa_is_the_least_cost_over_every_assignment():
         assert g.distance == pytest.approx((g.localisation + c**p / 2 * (g.missed + g.false)) ** (1 / p))
         assert g.missed - g.false == m - n
 
+def test_gospa_of_crowds_is_the_dense_assignment():
+    """Hundreds of points in clusters (many pairs in reach of each other) and scattered ones: the cluster-by-cluster
+    solution costs what one assignment over all points does."""
+    from scipy.optimize import linear_sum_assignment
+
+    rng = np.random.default_rng(12)
+    for trial in range(20):
+        centres = rng.uniform(0, 2000, size=(40, 2))
+        X = np.vstack([centres[rng.integers(40, size=150)] + rng.normal(0, 15, (150, 2)),
+                       rng.uniform(0, 2000, (50, 2))])
+        Y = np.vstack([X[rng.random(len(X)) < 0.7], rng.uniform(0, 2000, (30, 2))])
+        Y = Y + rng.normal(0, 6, Y.shape)
+        c, p = 20.0, 2.0
+        g = gospa(X, Y, c=c, p=p)
+        D = np.minimum(np.linalg.norm(X[:, None] - Y[None], axis=-1) ** p, c**p)
+        r, col = linear_sum_assignment(D - c**p)
+        k = int((D[r, col] < c**p).sum())
+        loc = float(D[r, col][D[r, col] < c**p].sum())
+        dense = (loc + c**p / 2 * (len(X) + len(Y) - 2 * k)) ** (1 / p)
+        assert g.distance == pytest.approx(dense, rel=1e-12), trial
+        assert 0 < g.missed < len(X) and g.false > 0
+
+
 def test_team_metrics():
     est = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 3.0], [1.0, -3.0]])  # mean (1, 0)
     np.testing.assert_allclose(consensus_disagreement(est), [1.0, 1.0, 3.0, 3.0])

@@ -95,20 +95,25 @@ class SlotStates:
         self._same = same & self.on[0] & self.on[1]
 
     # ------------------------------------------------------------------ poses
-    def poses(self, tick: int, alpha: float, step_dt: float) -> TrafficPoses:
+    def poses(self, tick: int, alpha: float, step_dt: float, idx: np.ndarray | None = None) -> TrafficPoses:
         """Poses at ``tick``, a fraction ``alpha`` in [0, 1] of the way from the previous step to the next one
-        (``step_dt``: the step length, s)."""
+        (``step_dt``: the step length, s); of the slots ``idx`` only, in that order, if given (the same numbers as
+        their rows of every slot's poses)."""
+        sel = slice(None) if idx is None else idx
+        xy0, xy1, yaw0, yaw1 = self.xy[0, sel], self.xy[1, sel], self.yaw[0, sel], self.yaw[1, sel]
+        same = self._same[sel]
+        d = yaw1 - yaw0
+        dyaw = np.arctan2(np.sin(d), np.cos(d))
         if alpha >= 1.0:
-            xy, yaw, speed, on = self.xy[1].copy(), self.yaw[1].copy(), self.speed[1].copy(), self.on[1].copy()
-            yaw_rate = np.where(self._same, self._dyaw(), 0.0) / step_dt
+            xy, yaw, speed, on = xy1.copy(), yaw1.copy(), self.speed[1, sel].copy(), self.on[1, sel].copy()
+            yaw_rate = np.where(same, dyaw, 0.0) / step_dt
         else:
-            same = self._same
-            dyaw = self._dyaw()
             a = np.where(same, alpha, 0.0)
-            xy = self.xy[0] + a[:, None] * (self.xy[1] - self.xy[0])
-            yaw = self.yaw[0] + a * dyaw
-            speed = self.speed[0] + a * (self.speed[1] - self.speed[0])
-            on = self.on[0].copy()
+            xy = xy0 + a[:, None] * (xy1 - xy0)
+            yaw = yaw0 + a * dyaw
+            sp0 = self.speed[0, sel]
+            speed = sp0 + a * (self.speed[1, sel] - sp0)
+            on = self.on[0, sel].copy()
             yaw_rate = np.where(same, dyaw, 0.0) / step_dt
         yaw = np.arctan2(np.sin(yaw), np.cos(yaw))
         speed = np.where(on, speed, 0.0)
@@ -116,10 +121,20 @@ class SlotStates:
         return TrafficPoses(tick=tick, xy=xy, yaw=yaw, speed=speed, v_xy=v_xy, yaw_rate=np.where(on, yaw_rate, 0.0),
                             active=on)
 
+    def active_at(self, alpha: float) -> np.ndarray:
+        """Which slots hold a vehicle on the road at ``alpha`` (the ``active`` of :meth:`poses`), without poses."""
+        return self.on[1] if alpha >= 1.0 else self.on[0]
+
+    def reach(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centre (n, 2), radius (n,)) m of a disc that holds each slot's position at every ``alpha`` of the
+        current step: the midpoint and half of the segment a slot interpolated along covers (1 mm more, for the
+        interpolation's rounding), the previous position for the others (which stay there, or jump to the next at
+        ``alpha`` 1: radius the whole jump)."""
+        xy0, xy1 = self.xy[0], self.xy[1]
+        half = 0.5 * np.hypot(*(xy1 - xy0).T)
+        centre = np.where(self._same[:, None], 0.5 * (xy0 + xy1), xy0)
+        return centre, np.where(self._same, half, 2.0 * half) + 1e-3
+
     def roads_at(self, alpha: float) -> list[str]:
         """SUMO edge of each slot at the step nearer to ``alpha`` (``""`` off the road)."""
         return list(self.road[1] if alpha >= 0.5 else self.road[0])
-
-    def _dyaw(self) -> np.ndarray:
-        d = self.yaw[1] - self.yaw[0]
-        return np.arctan2(np.sin(d), np.cos(d))

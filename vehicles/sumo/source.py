@@ -162,6 +162,7 @@ class SumoTraffic:
         self._physics_live: set[str] = set()  # those SUMO has now
         self._physics_routes = 0
         self._pose_cache: TrafficPoses | None = None
+        self._reach: tuple[np.ndarray, np.ndarray] | None = None  # SlotStates.reach of the current step
         self._closed = False
         self._start(seed)
         _active = self
@@ -226,6 +227,7 @@ class SumoTraffic:
             self._trips.add(arrived)
         self._read_states()
         self._pose_cache = None
+        self._reach = None
 
     def _read_states(self) -> None:
         """Every occupied slot's state at the step just taken, from the vehicles' subscriptions (plain lists: this
@@ -309,29 +311,57 @@ class SumoTraffic:
         self._sync(tick, np.ones(self.config.n_slots, dtype=bool))
 
     def sync_near(self, tick: int, points_xy: np.ndarray, radius: float) -> None:
-        """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``."""
+        """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``.
+
+        Asked before every physics step: the slots whose disc of the step (:meth:`SlotStates.reach`) comes within
+        ``radius`` are the only ones posed (the same numbers as their rows of :meth:`poses`); the others cannot be
+        that near at any tick of the step."""
         pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
         if not len(pts):
             return
-        ps = self.poses(tick)
-        d2 = ((ps.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
-        self._sync(tick, d2 <= radius * radius)
+        if self._pose_cache is not None and self._pose_cache.tick == tick:
+            ps = self._pose_cache
+            d2 = ((ps.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            self._sync(tick, d2 <= radius * radius)
+            return
+        if self._reach is None:
+            self._reach = self._slots.reach()
+        centre, reach = self._reach
+        c2 = ((centre[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+        alpha = (tick - self._t_prev) / self.config.period
+        cand = np.flatnonzero(self._slots.active_at(alpha) & (c2 <= (radius + reach) ** 2))
+        if len(cand):
+            sub = self._slots.poses(tick, alpha, self.config.period / self.config.physics_hz, idx=cand)
+            d2 = ((sub.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            keep = (d2 <= radius * radius) & (self._placed[cand] != tick)
+            self._place(tick, cand[keep], sub.xy[keep], sub.yaw[keep])
+        self._park(self._slots.active_at(alpha))
 
     def _sync(self, tick: int, want: np.ndarray) -> None:
         ps = self.poses(tick)
-        cid, z, reset = self.client_id, self.config.park_z, p.resetBasePositionAndOrientation
         place = np.flatnonzero(want & ps.active & (self._placed != tick))
         if len(place):
-            bodies, zs = self.body_ids[place].tolist(), self.ground_z[place].tolist()
-            xs, ys = ps.xy[place, 0].tolist(), ps.xy[place, 1].tolist()
-            half = 0.5 * ps.yaw[place]
-            qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
-            for b, x, y, bz, sz, cw in zip(bodies, xs, ys, zs, qz, qw, strict=True):
-                reset(b, (x, y, bz), (0.0, 0.0, sz, cw), physicsClientId=cid)
-            self._placed[place] = tick
-        park = np.flatnonzero(~ps.active & (self._placed >= 0))
+            self._place(tick, place, ps.xy[place], ps.yaw[place])
+        self._park(ps.active)
+
+    def _place(self, tick: int, place: np.ndarray, xy: np.ndarray, yaw: np.ndarray) -> None:
+        """Bodies of the slots ``place`` to positions ``xy`` and headings ``yaw`` (their poses at ``tick``)."""
+        cid, reset = self.client_id, p.resetBasePositionAndOrientation
+        bodies, zs = self.body_ids[place].tolist(), self.ground_z[place].tolist()
+        xs, ys = xy[:, 0].tolist(), xy[:, 1].tolist()
+        half = 0.5 * yaw
+        qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
+        for b, x, y, bz, sz, cw in zip(bodies, xs, ys, zs, qz, qw, strict=True):
+            reset(b, (x, y, bz), (0.0, 0.0, sz, cw), physicsClientId=cid)
+        self._placed[place] = tick
+
+    def _park(self, active: np.ndarray) -> None:
+        """Park the bodies of the slots no longer on the road."""
+        cid, z = self.client_id, self.config.park_z
+        park = np.flatnonzero(~active & (self._placed >= 0))
         for k in park.tolist():
-            reset(int(self.body_ids[k]), (*self._park_xy[k], z), (0.0, 0.0, 0.0, 1.0), physicsClientId=cid)
+            p.resetBasePositionAndOrientation(int(self.body_ids[k]), (*self._park_xy[k], z), (0.0, 0.0, 0.0, 1.0),
+                                              physicsClientId=cid)
         self._placed[park] = -1
 
     def _park_all(self) -> None:

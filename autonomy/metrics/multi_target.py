@@ -91,9 +91,9 @@ def pairs_within(X: np.ndarray, Y: np.ndarray, radius: float) -> tuple[np.ndarra
     X, Y = _as_points(X), _as_points(Y)
     if len(X) == 0 or len(Y) == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
-    near = cKDTree(X).query_ball_tree(cKDTree(Y), r=radius * (1.0 + 1e-9) + 1e-12)  # the tree's own rounding aside
-    i = np.repeat(np.arange(len(X)), [len(c) for c in near])
-    j = np.fromiter((k for c in near for k in sorted(c)), dtype=np.int64, count=len(i))
+    near = cKDTree(X).sparse_distance_matrix(cKDTree(Y), radius * (1.0 + 1e-9) + 1e-12, output_type="ndarray")
+    order = np.lexsort((near["j"], near["i"]))  # the tree's own distances and rounding aside: only its pairs
+    i, j = near["i"][order].astype(np.int64), near["j"][order].astype(np.int64)
     d = np.linalg.norm(X[i] - Y[j], axis=-1)
     keep = d <= radius
     return i[keep], j[keep], d[keep]
@@ -103,8 +103,8 @@ def gospa_of_pairs(m: int, n: int, i: np.ndarray, j: np.ndarray, d: np.ndarray, 
                    p: float = 2.0) -> GospaResult:
     """:func:`gospa` of ``m`` truths and ``n`` estimates given every pair ``(i, j)`` nearer than ``c`` with its
     distance ``d`` (pairs at ``c`` or beyond may be given too; they are never assigned). The least-cost matching
-    splits over the connected clusters of those pairs: each is a rectangular assignment of ``D − c^p`` (0 off the
-    pairs, i.e. unassigned) solved alone, most of them a single pair among traffic."""
+    splits over the connected clusters of those pairs: a cluster of one pair (most of them among traffic) is that
+    pair, and the rest are one rectangular assignment of ``D − c^p`` (0 off the pairs, i.e. unassigned)."""
     _check(c, p)
     half = c**p / 2.0
     D = np.minimum(np.asarray(d, dtype=float) ** p, 2.0 * half)
@@ -115,20 +115,17 @@ def gospa_of_pairs(m: int, n: int, i: np.ndarray, j: np.ndarray, d: np.ndarray, 
         _, label = connected_components(coo_matrix((np.ones(len(D)), (i, m + j)), shape=(m + n, m + n)),
                                         directed=False)
         comp = label[i]
-        order = np.argsort(comp, kind="stable")
-        bounds = np.flatnonzero(np.diff(comp[order])) + 1
-        for idx in np.split(order, bounds):
-            if len(idx) == 1:
-                k = int(idx[0])
-                pairs.append((int(i[k]), int(j[k]), float(D[k])))
-                continue
-            rows, r_at = np.unique(i[idx], return_inverse=True)
-            cols, c_at = np.unique(j[idx], return_inverse=True)
+        alone = np.bincount(comp)[comp] == 1  # a cluster of one pair: assigned, without a solver
+        pairs = list(zip(i[alone].tolist(), j[alone].tolist(), D[alone].tolist(), strict=True))
+        rest = np.flatnonzero(~alone)
+        if len(rest):  # the contested clusters together: one rectangular assignment (0 off the pairs: unassigned)
+            rows, r_at = np.unique(i[rest], return_inverse=True)
+            cols, c_at = np.unique(j[rest], return_inverse=True)
             sub = np.zeros((len(rows), len(cols)))
-            sub[r_at, c_at] = D[idx] - 2.0 * half
-            r, col = linear_sum_assignment(sub)
+            sub[r_at, c_at] = D[rest] - 2.0 * half
             full = np.full((len(rows), len(cols)), 2.0 * half)
-            full[r_at, c_at] = D[idx]
+            full[r_at, c_at] = D[rest]
+            r, col = linear_sum_assignment(sub)
             pairs += [(int(rows[a]), int(cols[b]), float(full[a, b])) for a, b in zip(r, col, strict=True)
                       if full[a, b] < 2.0 * half]
     pairs.sort()

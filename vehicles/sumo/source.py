@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pybullet as p
+from scipy.spatial import cKDTree
 
 from vehicles.car.box_body import CarBoxBody
 from vehicles.car.params import CarParams, load_car
@@ -46,6 +47,8 @@ _PHYSICS_PREFIX = "skytrack_physics_"
 _STOPPED_SPEED = 0.1  # m/s; a slot slower than this is reported stopped
 _NO_STATE = {0x42: (0.0, 0.0), 0x43: 0.0, 0x40: 0.0, 0x50: ""}  # a vehicle SUMO has no state for (teleporting)
 _active: SumoTraffic | None = None  # the one libsumo simulation of this process
+
+_SHORT_REACH = 50.0  # m; slots moving less in a step are found through a k-d tree in sync_near, the others always
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -162,7 +165,7 @@ class SumoTraffic:
         self._physics_live: set[str] = set()  # those SUMO has now
         self._physics_routes = 0
         self._pose_cache: TrafficPoses | None = None
-        self._reach: tuple[np.ndarray, np.ndarray] | None = None  # SlotStates.reach of the current step
+        self._reach: tuple | None = None  # SlotStates.reach of the current step and its k-d tree (see sync_near)
         self._closed = False
         self._start(seed)
         _active = self
@@ -313,9 +316,9 @@ class SumoTraffic:
     def sync_near(self, tick: int, points_xy: np.ndarray, radius: float) -> None:
         """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``.
 
-        Asked before every physics step: the slots whose disc of the step (:meth:`SlotStates.reach`) comes within
-        ``radius`` are the only ones posed (the same numbers as their rows of :meth:`poses`); the others cannot be
-        that near at any tick of the step."""
+        Asked before every physics step: the slots whose disc of the step (:meth:`SlotStates.reach`, found through a
+        k-d tree of the discs made once per step) comes within ``radius`` are the only ones posed (the same numbers as
+        their rows of :meth:`poses`); the others cannot be that near at any tick of the step."""
         pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
         if not len(pts):
             return
@@ -324,12 +327,18 @@ class SumoTraffic:
             d2 = ((ps.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
             self._sync(tick, d2 <= radius * radius)
             return
-        if self._reach is None:
-            self._reach = self._slots.reach()
-        centre, reach = self._reach
-        c2 = ((centre[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+        if self._reach is None:  # a tree of the discs of a step's usual moves; the few long jumps checked each time
+            centre, reach = self._slots.reach()
+            short = np.flatnonzero(reach <= _SHORT_REACH)
+            self._reach = (centre, reach, cKDTree(centre[short]) if len(short) else None, short,
+                           np.flatnonzero(reach > _SHORT_REACH))
+        centre, reach, tree, short, far = self._reach
         alpha = (tick - self._t_prev) / self.config.period
-        cand = np.flatnonzero(self._slots.active_at(alpha) & (c2 <= (radius + reach) ** 2))
+        near = tree.query_ball_point(pts, radius + _SHORT_REACH) if tree is not None else []
+        cand = np.union1d(short[np.fromiter((k for ks in near for k in ks), dtype=np.int64)], far)
+        if len(cand):
+            c2 = ((centre[cand, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            cand = cand[self._slots.active_at(alpha)[cand] & (c2 <= (radius + reach[cand]) ** 2)]
         if len(cand):
             sub = self._slots.poses(tick, alpha, self.config.period / self.config.physics_hz, idx=cand)
             d2 = ((sub.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)

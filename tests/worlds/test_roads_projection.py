@@ -1,15 +1,44 @@
-"""The batch projections of a road network (worlds/roads/projection.py) against the per-point ones they stand for:
-:meth:`Road.project` and :meth:`RoadNetwork.nearest`, on a procedural town's curved and straight roads, for points on
-the roads, beside them, far off and beyond their ends."""
+"""Projections onto roads (worlds/roads/projection.py, compiled): Road.project against the algorithm written out in
+plain Python here (nearest table sample, osculating-circle steps), and the batch projections of a network against the
+per-point ones, on a procedural town's curved and straight roads, for points on the roads, beside them, far off and
+beyond their ends."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 from worlds.town import TownConfig, generate_town
 
-TOL = 1e-9  # m: the compiled step's hypot is the C library's, Road.project's Python's (last-bit differences)
+TOL = 1e-9  # m: the compiled step's hypot is the C library's, the reference's Python's (last-bit differences)
+
+
+def _reference(road, p):
+    """Road.project in plain Python: the first nearest table sample, then osculating-circle steps (at most 8)."""
+    px, py = float(p[0]), float(p[1])
+    j = int(np.argmin(((road._xy - (px, py)) ** 2).sum(axis=1)))
+    s = j * road._h
+    x, y, th, ka = road._interp1(s)
+    lat = 0.0
+    for _ in range(8):
+        a = (px - x) * math.cos(th) + (py - y) * math.sin(th)
+        lat = -(px - x) * math.sin(th) + (py - y) * math.cos(th)
+        if abs(ka) * (abs(a) + abs(lat)) < 1e-9:
+            ds = a
+        else:
+            ds = math.atan2(ka * a, 1.0 - ka * lat) / ka
+            lat = (1.0 - math.hypot(1.0 - ka * lat, ka * a)) / ka
+        s_new = min(max(s + ds, 0.0), road.length)
+        if s_new != s + ds:
+            x, y, th, ka = road._interp1(s_new)
+            return s_new, -(px - x) * math.sin(th) + (py - y) * math.cos(th)
+        s = s_new
+        if abs(ds) < 1e-9:
+            return s, lat
+        x, y, th, ka = road._interp1(s)
+    return s, lat
 
 
 @pytest.fixture(scope="module")
@@ -28,16 +57,17 @@ def _points(net, rng, m):
     return rid, near, rng.uniform(-260.0, 260.0, size=(m, 2))
 
 
-def test_project_on_is_road_project(net):
+def test_road_project_is_the_reference_and_project_on_is_road_project(net):
     rng = np.random.default_rng(11)
     rid, near, anywhere = _points(net, rng, 600)
     curved = sum(net.roads[r]._n > 1 for r in rid)
     assert curved > 100  # the spline roads' tables are exercised, not only straight ones
     for pts in (near, anywhere):
+        one = np.array([net.roads[r].project(p) for r, p in zip(rid, pts, strict=True)])
+        ref = np.array([_reference(net.roads[r], p) for r, p in zip(rid, pts, strict=True)])
+        np.testing.assert_allclose(one, ref, rtol=0, atol=TOL)
         s, lat = net.project_on(rid, pts)
-        ref = np.array([net.roads[r].project(p) for r, p in zip(rid, pts, strict=True)])
-        np.testing.assert_allclose(s, ref[:, 0], rtol=0, atol=TOL)
-        np.testing.assert_allclose(lat, ref[:, 1], rtol=0, atol=TOL)
+        np.testing.assert_array_equal(np.c_[s, lat], one)  # the same compiled steps
     assert (s == 0).any() and any(si == net.roads[r].length for r, si in zip(rid, s, strict=True))  # ends clipped
 
 

@@ -37,12 +37,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from worlds.roads.projection import MAX_PROJECT_STEPS, project_one
 from worlds.roads.spline import knots, line_table, spline_table
 
 __all__ = ["Road"]
 
 _MIN_CHORD = 1e-6  # m; consecutive vertices closer than this are rejected as duplicates
-MAX_PROJECT_STEPS = 8
 _PROJECT_CHUNK = 256  # points per block of the nearest-sample search in project_many
 
 
@@ -230,36 +230,10 @@ class Road:
         """(s, lateral) of the centre-line point nearest to ``p_xy`` (m).
 
         ``lateral`` is positive to the left of travel. Beyond the ends ``s`` is clipped to 0 or ``length`` and
-        ``lateral`` is the offset along the end normal.
+        ``lateral`` is the offset along the end normal. Compiled (:func:`~worlds.roads.projection.project_one`).
         """
-        px, py = float(p_xy[0]), float(p_xy[1])
-        d = self._xy - (px, py)
-        j = int(np.argmin(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]))
-        xs, ys, ths, kas = self._lists
-        return self._refine(px, py, j * self._h, xs[j], ys[j], ths[j], kas[j])
-
-    def _refine(self, px: float, py: float, s: float, x: float, y: float, th: float, ka: float) -> tuple[float, float]:
-        """Osculating-circle steps from the centre-line state (s, x, y, th, ka) to the foot point of (px, py)."""
-        lat = 0.0
-        for _ in range(MAX_PROJECT_STEPS):
-            c, sn = math.cos(th), math.sin(th)
-            a = (px - x) * c + (py - y) * sn
-            lat = -(px - x) * sn + (py - y) * c
-            if abs(ka) * (abs(a) + abs(lat)) < 1e-9:
-                ds = a
-            else:
-                ds = math.atan2(ka * a, 1.0 - ka * lat) / ka
-                lat = (1.0 - math.hypot(1.0 - ka * lat, ka * a)) / ka
-            s_new = min(max(s + ds, 0.0), self.length)
-            if s_new != s + ds:  # clipped at an end: lateral along the end normal
-                x, y, th, ka = self._interp1(s_new)
-                lat = -(px - x) * math.sin(th) + (py - y) * math.cos(th)
-                return s_new, lat
-            if abs(ds) < 1e-9:
-                return s_new, lat
-            s = s_new
-            x, y, th, ka = self._interp1(s)
-        return s, lat
+        return project_one(self._xy, self._th, self._ka, 0, self._n, self._h, self.length, float(p_xy[0]),
+                           float(p_xy[1]))
 
     def project_many(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`project` of (M, 2) points at once; returns arrays (s, lateral), each (M,)."""

@@ -33,11 +33,13 @@ def test_one_target_among_kinematic_traffic_on_distinct_streets_spaced_apart():
     assert world.roads == base.roads and world.sim == base.sim
     # the UAVs are road_standoff's, with class readings added to their sensors (and any sensor added after them), and
     # the estimator settings the world file declares for traffic: a target model that brakes as a car does (Singer
-    # σa 2 m/s² for Table I's 0.66) and the iterated EKF for the cameras' bearings
+    # σa 2 m/s² for Table I's 0.66) and the iterated EKF for the cameras' bearings; and the team's switch margin
     for u, b in zip(world.uavs, base.uavs, strict=True):
         est, base_est = u.autonomy.estimator, b.autonomy.estimator
         assert est.params == {**base_est.params, "singer_sigma_a": 2.0, "ekf_iterations": 3}
-        assert u.autonomy.model_copy(update={"estimator": est.model_copy(update={"params": base_est.params})}) \
+        assert u.autonomy.fusion.switch_margin == 0.1 and b.autonomy.fusion.switch_margin == 0.0
+        assert u.autonomy.model_copy(update={"estimator": est.model_copy(update={"params": base_est.params}),
+                                             "fusion": u.autonomy.fusion.model_copy(update={"switch_margin": 0.0})}) \
             == b.autonomy
         assert u.initial == b.initial
         for s, sb in zip(u.sensors, b.sensors, strict=False):

@@ -186,8 +186,7 @@ class TeamTrackFusion:
         if best < self.min_probability or best <= none / members:
             return TeamTarget(estimate=local, probability=max(p_own, p_loose), own_track_id=None, fused_with=0)
         if p_own >= p_loose:
-            self._kept = mine[best_own].track_id
-            track_id = mine[best_own].track_id
+            track_id = self._kept = mine[best_own].track_id
             if track_id != own_target:
                 self.disagreements += 1
             parts = [own_est[best_own], *(pred[j] for pred, j in fused_parts[best_own])]

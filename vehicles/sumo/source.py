@@ -51,6 +51,11 @@ _active: SumoTraffic | None = None  # the one libsumo simulation of this process
 _SHORT_REACH = 50.0  # m; slots moving less in a step are found through a k-d tree in sync_near, the others always
 
 
+
+def _nearest_d2(xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Squared distance (m²) from each of ``xy`` (n, 2) to the nearest of ``pts`` (k, 2)."""
+    return ((xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+
 @dataclass(frozen=True, kw_only=True)
 class SumoTrafficConfig:
     """Settings of a SUMO traffic source.
@@ -324,7 +329,7 @@ class SumoTraffic:
             return
         if self._pose_cache is not None and self._pose_cache.tick == tick:
             ps = self._pose_cache
-            d2 = ((ps.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            d2 = _nearest_d2(ps.xy, pts)
             self._sync(tick, d2 <= radius * radius)
             return
         if self._reach is None:  # a tree of the discs of a step's usual moves; the few long jumps checked each time
@@ -337,11 +342,11 @@ class SumoTraffic:
         near = tree.query_ball_point(pts, radius + _SHORT_REACH) if tree is not None else []
         cand = np.union1d(short[np.fromiter((k for ks in near for k in ks), dtype=np.int64)], far)
         if len(cand):
-            c2 = ((centre[cand, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            c2 = _nearest_d2(centre[cand], pts)
             cand = cand[self._slots.active_at(alpha)[cand] & (c2 <= (radius + reach[cand]) ** 2)]
         if len(cand):
             sub = self._slots.poses(tick, alpha, self.config.period / self.config.physics_hz, idx=cand)
-            d2 = ((sub.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+            d2 = _nearest_d2(sub.xy, pts)
             keep = (d2 <= radius * radius) & (self._placed[cand] != tick)
             self._place(tick, cand[keep], sub.xy[keep], sub.yaw[keep])
         self._park(self._slots.active_at(alpha))

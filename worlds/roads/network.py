@@ -7,6 +7,7 @@ centre-line (the dividing line), each with its lanes on its own right.
 from __future__ import annotations
 
 import heapq
+import weakref
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -22,6 +23,7 @@ __all__ = ["RoadNetwork", "street_road_ids"]
 
 _NODE_TOL = 1e-3  # m; a road must start / end this close to its junction nodes
 _SEARCH_SPACING = 2.0  # m; spacing of the samples indexing all roads for nearest()
+_TABLES: weakref.WeakKeyDictionary[RoadNetwork, RoadTables] = weakref.WeakKeyDictionary()  # see _road_tables
 
 
 def street_road_ids(street_id: str) -> tuple[str, str]:
@@ -66,7 +68,6 @@ class RoadNetwork:
             self._out[road.start_node].append(road.id)
         self._ids = list(self.roads)
         self._index: tuple[cKDTree, np.ndarray] | None = None
-        self._tables: RoadTables | None = None  # every road's table end to end, for the batch projections
         self._rank = {rid: k for k, rid in enumerate(self._ids)}
 
     def _check_road(self, road: Road) -> None:
@@ -191,28 +192,14 @@ class RoadNetwork:
         return out
 
     def nearest(self, p_xy: np.ndarray) -> tuple[str, float, float]:
-        """(road_id, s, lateral) of the road point nearest to ``p_xy`` (m), over all roads.
+        """(road_id, s, lateral) of the road point nearest to ``p_xy`` (m), over all roads (:meth:`nearest_many` of
+        one point).
 
         Twins share a centre-line; between them the one with the point on its right (``lateral <= 0``, its own
         carriageway) wins.
         """
-        if not self.roads:
-            raise ValueError("nearest: the network has no roads")
-        tree, owner = self._search_index()
-        p = np.asarray(p_xy, dtype=float)[:2]
-        d0, _ = tree.query(p)
-        cand = sorted(set(owner[tree.query_ball_point(p, d0 + _SEARCH_SPACING / 2 + 1e-9)].tolist()))
-        best: tuple[float, int, str, float, float] | None = None
-        for k in cand:
-            rid = self._ids[k]
-            road = self.roads[rid]
-            s, lat = road.project(p)
-            dist = float(np.hypot(*(road.point(s) - p)))
-            key = (round(dist, 6), 0 if lat <= 0 else 1, rid, s, lat)
-            if best is None or key[:3] < best[:3]:
-                best = key
-        assert best is not None
-        return best[2], best[3], best[4]
+        ids, s, lat = self.nearest_many(np.asarray(p_xy, dtype=float)[:2])
+        return ids[0], float(s[0]), float(lat[0])
 
     def project_on(self, road_ids: Sequence[str], points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(s, lateral) of each of the (P, 2) ``points`` (m) projected onto the road ``road_ids[i]``: what
@@ -222,8 +209,10 @@ class RoadNetwork:
         return s, lat
 
     def nearest_many(self, points: np.ndarray) -> tuple[list[str], np.ndarray, np.ndarray]:
-        """:meth:`nearest` of each of the (P, 2) ``points`` (m): road ids, arc lengths and lateral offsets, with the
-        candidates of :meth:`nearest` projected in one compiled call (the same roads; s and lateral within 1e-9 m)."""
+        """(road ids, arc lengths, lateral offsets) of the road point nearest to each of the (P, 2) ``points`` (m):
+        the candidate roads from a k-d tree of samples along every road, all (point, candidate) pairs projected in one
+        compiled call (:mod:`worlds.roads.projection`), the nearest by distance (to the micrometre), then the road
+        with the point on its right, then the road id."""
         pts = np.asarray(points, dtype=float).reshape(-1, 2)
         if len(pts) == 0:
             return [], np.zeros(0), np.zeros(0)
@@ -245,9 +234,12 @@ class RoadNetwork:
         return [b[2] for b in best], np.array([b[3] for b in best]), np.array([b[4] for b in best])
 
     def _road_tables(self) -> RoadTables:
-        if self._tables is None:
-            self._tables = RoadTables.of([self.roads[rid] for rid in self._ids])
-        return self._tables
+        """Every road's table end to end (made at the first batch projection), kept beside the network rather than
+        in it: the map cache stores a network's own state, and these are derived from its roads."""
+        tables = _TABLES.get(self)
+        if tables is None:
+            tables = _TABLES[self] = RoadTables.of([self.roads[rid] for rid in self._ids])
+        return tables
 
     def _search_index(self) -> tuple[cKDTree, np.ndarray]:
         if self._index is None:

@@ -96,3 +96,47 @@ def test_nearest_is_the_nearest_over_every_road(net):
     assert [net.nearest(p) for p in pts[::25]] == [(i, si, li) for i, si, li in zip(ids[::25], s[::25], lat[::25],
                                                                                       strict=True)]
     assert net.nearest_many(np.zeros((0, 2)))[0] == []
+
+
+def _numpy_interp(road, s):
+    """Road table evaluation in vectorised NumPy (the form the compiled kernel replaced): x, y, theta, kappa."""
+    s = np.clip(s, 0.0, road.length)
+    h = road._h
+    j = np.minimum((s / h).astype(np.int64), road._n - 1)
+    u = s / h - j
+    u2, u3 = u * u, u * u * u
+    h00, h10, h01, h11 = 2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, 3 * u2 - 2 * u3, u3 - u2
+    th0, th1, k0, k1 = road._th[j], road._th[j + 1], road._ka[j], road._ka[j + 1]
+    p0, p1 = road._xy[j], road._xy[j + 1]
+    c0, s0, c1, s1 = np.cos(th0), np.sin(th0), np.cos(th1), np.sin(th1)
+    x = h00 * p0[..., 0] + h10 * h * c0 + h01 * p1[..., 0] + h11 * h * c1
+    y = h00 * p0[..., 1] + h10 * h * s0 + h01 * p1[..., 1] + h11 * h * s1
+    th = h00 * th0 + h10 * h * k0 + h01 * th1 + h11 * h * k1
+    d00, d10, d01, d11 = 6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, 6 * u - 6 * u2, 3 * u2 - 2 * u
+    ka = (d00 * th0 + d01 * th1) / h + d10 * k0 + d11 * k1
+    return x, y, th, ka
+
+
+def test_compiled_table_evaluation_is_the_numpy_form(net):
+    """Road._interp / Road.sample (compiled) give the vectorised NumPy evaluation's numbers on every road of the
+    town, at arc lengths inside, at the ends, on table knots and beyond; other shapes of ``s`` keep their shape;
+    a NaN arc length is refused."""
+    rng = np.random.default_rng(11)
+    for road in net.roads.values():
+        s = np.r_[rng.uniform(-5.0, road.length + 5.0, 40), 0.0, road.length, np.arange(road._n + 1) * road._h,
+                  -np.inf, np.inf]
+        x, y, th, ka = _numpy_interp(road, s)
+        got = road._interp(s)
+        for a, b in zip(got[:4], (x, y, th, ka), strict=True):
+            assert np.array_equal(a, b)
+        assert np.array_equal(got[4], np.clip(s, 0.0, road.length))
+        xy, head, kap = road.sample(s)
+        assert np.array_equal(xy, np.stack([x, y], axis=-1))
+        assert np.array_equal(head, np.arctan2(np.sin(th), np.cos(th)))
+        assert np.array_equal(kap, ka)
+    road = next(iter(net.roads.values()))
+    grid = rng.uniform(0.0, road.length, (3, 4))
+    assert road.point(grid).shape == (3, 4, 2) and road.heading(grid).shape == (3, 4)
+    assert np.array_equal(road.curvature(grid), _numpy_interp(road, grid)[3])
+    with pytest.raises(ValueError, match="NaN"):
+        road.sample(np.array([1.0, np.nan]))

@@ -36,6 +36,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from worlds.roads.projection import MAX_PROJECT_STEPS, project_one
 from worlds.roads.spline import knots, line_table, spline_table
@@ -150,22 +151,13 @@ class Road:
 
     # ------------------------------------------------------------------ evaluation
     def _interp(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised Hermite evaluation at arc lengths ``s`` (already an array): x, y, theta, kappa, clipped s."""
-        s = np.clip(s, 0.0, self.length)
-        h = self._h
-        j = np.minimum((s / h).astype(np.int64), self._n - 1)
-        u = s / h - j
-        u2, u3 = u * u, u * u * u
-        h00, h10, h01, h11 = 2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, 3 * u2 - 2 * u3, u3 - u2
-        th0, th1, k0, k1 = self._th[j], self._th[j + 1], self._ka[j], self._ka[j + 1]
-        p0, p1 = self._xy[j], self._xy[j + 1]
-        c0, s0, c1, s1 = np.cos(th0), np.sin(th0), np.cos(th1), np.sin(th1)
-        x = h00 * p0[..., 0] + h10 * h * c0 + h01 * p1[..., 0] + h11 * h * c1
-        y = h00 * p0[..., 1] + h10 * h * s0 + h01 * p1[..., 1] + h11 * h * s1
-        th = h00 * th0 + h10 * h * k0 + h01 * th1 + h11 * h * k1
-        d00, d10, d01, d11 = 6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, 6 * u - 6 * u2, 3 * u2 - 2 * u
-        ka = (d00 * th0 + d01 * th1) / h + d10 * k0 + d11 * k1
-        return x, y, th, ka, s
+        """Hermite evaluation at arc lengths ``s`` (already an array, any shape): x, y, theta, kappa, clipped s
+        (compiled, :func:`_hermite`)."""
+        flat = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        out = np.empty((5, flat.size))
+        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, False)
+        x, y, th, ka, sc = (row.reshape(np.shape(s)) for row in out)
+        return x, y, th, ka, sc
 
     def _interp1(self, s: float) -> tuple[float, float, float, float]:
         """Scalar version of :meth:`_interp` in plain floats (used by :meth:`project`): x, y, theta, kappa."""
@@ -197,11 +189,15 @@ class Road:
         return np.stack([x, y], axis=-1)
 
     def sample(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(M, 2) centre-line points, (M,) headings and (M,) curvatures at arc lengths ``s`` (an array): what
-        :meth:`point`, :meth:`heading` and :meth:`curvature` give, from one evaluation of the spline instead of
-        three."""
-        x, y, th, ka, _ = self._interp(np.asarray(s, dtype=float))
-        return np.stack([x, y], axis=-1), np.arctan2(np.sin(th), np.cos(th)), ka
+        """(M, 2) centre-line points, (M,) headings (wrapped to (-pi, pi]) and (M,) curvatures at arc lengths ``s``
+        (an array): what :meth:`point`, :meth:`heading` and :meth:`curvature` give, from one evaluation of the spline
+        instead of three."""
+        flat = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        out = np.empty((5, flat.size))
+        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, True)
+        shape = np.shape(s)
+        return np.stack([out[0].reshape(shape), out[1].reshape(shape)], axis=-1), out[2].reshape(shape), \
+            out[3].reshape(shape)
 
     def tangent(self, s: float | np.ndarray) -> np.ndarray:
         """Unit tangent (direction of travel) at arc length ``s``; (2,) or (M, 2)."""
@@ -286,3 +282,31 @@ class Road:
     def samples(self) -> np.ndarray:
         """(N+1, 2) read-only table of centre-line points at uniform arc-length spacing ``length / N`` (m)."""
         return self._xy
+
+
+@njit(cache=True)
+def _hermite(xy: np.ndarray, th: np.ndarray, ka: np.ndarray, h: float, n: int, length: float, s: np.ndarray,
+             out: np.ndarray, wrap: bool) -> None:
+    """Cubic Hermite evaluation of a road's table (module docstring) at arc lengths ``s`` (M,): writes x, y, theta,
+    kappa and the clipped arc length into the rows of ``out`` (5, M); theta wrapped to (-pi, pi] by
+    ``atan2(sin, cos)`` when ``wrap``. The operations, in their order, of the vectorised NumPy form it replaced, so
+    the numbers are the same; a NaN arc length raises (it has no table interval)."""
+    for i in range(s.shape[0]):
+        si = s[i]
+        if si != si:
+            raise ValueError("Road: arc length is NaN")
+        si = min(max(si, 0.0), length)
+        q = si / h
+        j = min(int(q), n - 1)
+        u = q - j
+        u2, u3 = u * u, u * u * u
+        h00, h10, h01, h11 = 2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, 3 * u2 - 2 * u3, u3 - u2
+        th0, th1, k0, k1 = th[j], th[j + 1], ka[j], ka[j + 1]
+        c0, s0, c1, s1 = math.cos(th0), math.sin(th0), math.cos(th1), math.sin(th1)
+        out[0, i] = h00 * xy[j, 0] + h10 * h * c0 + h01 * xy[j + 1, 0] + h11 * h * c1
+        out[1, i] = h00 * xy[j, 1] + h10 * h * s0 + h01 * xy[j + 1, 1] + h11 * h * s1
+        t = h00 * th0 + h10 * h * k0 + h01 * th1 + h11 * h * k1
+        out[2, i] = math.atan2(math.sin(t), math.cos(t)) if wrap else t
+        d00, d10, d01, d11 = 6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, 6 * u - 6 * u2, 3 * u2 - 2 * u
+        out[3, i] = (d00 * th0 + d01 * th1) / h + d10 * k0 + d11 * k1
+        out[4, i] = si

@@ -193,7 +193,9 @@ class LanePath:
         smooth = [self._smooth_join(roads[k], roads[k + 1], offsets[k], offsets[k + 1])
                   for k in range(len(roads) - 1)]
         cuts = [min(corner_length, 0.45 * r.length) for r in roads]
-        xy, hd, kp, ri, rs, cm = [], [], [], [], [], []
+        xy, hd, kp, rs = [], [], [], []
+        piece_road, piece_len, piece_corner = [], [], []  # runs of samples: their road index, count, corner flag
+        count = 0  # samples so far
         junction_index: list[int] = []
         for k, road in enumerate(roads):
             a = s_start if k == 0 else (0.0 if smooth[k - 1] else cuts[k])
@@ -202,34 +204,37 @@ class LanePath:
             n = max(2, int(math.ceil((b - a) / ds)) + 1)
             s, p, h, kap = _sampled(road, a, b, n, offsets[k])
             if k > 0 and smooth[k - 1]:  # tangent-continuous join: no corner, drop the duplicated node sample
-                junction_index.append(sum(len(x) for x in xy) - 1)
+                junction_index.append(count - 1)
                 s, p, h, kap, n = s[1:], p[1:], h[1:], kap[1:], n - 1
             elif k > 0:  # corner from the previous road's cut end into this road's cut start
                 pts, ch, ck, corner_s = _corner(roads[k - 1], road, (xy[-1][-1], float(hd[-1][-1])),
                                                 (p[0], float(h[0])), cuts[k - 1], cuts[k], ds)
                 m = len(pts)
                 half = m // 2
-                xy.append(pts), hd.append(ch), kp.append(ck)
-                ri.append(np.concatenate([np.full(half, k - 1), np.full(m - half, k)]))
-                cm.append(np.ones(m, dtype=bool))
-                rs.append(corner_s)
-                junction_index.append(sum(len(x) for x in xy[:-1]) - 1)
-            xy.append(p), hd.append(h), kp.append(kap), ri.append(np.full(n, k)), rs.append(s)
-            cm.append(np.zeros(n, dtype=bool))
+                xy.append(pts), hd.append(ch), kp.append(ck), rs.append(corner_s)
+                piece_road += (k - 1, k)
+                piece_len += (half, m - half)
+                piece_corner += (True, True)
+                junction_index.append(count - 1)
+                count += m
+            xy.append(p), hd.append(h), kp.append(kap), rs.append(s)
+            piece_road.append(k), piece_len.append(n), piece_corner.append(False)
+            count += n
         self.xy = np.concatenate(xy)
         self.heading = np.concatenate(hd)
         self.kappa = np.concatenate(kp)
-        self.road_index = np.concatenate(ri).astype(int)
+        self.road_index = np.repeat(np.array(piece_road, dtype=int), piece_len)
         self.road_s = np.concatenate(rs)
-        self.in_corner = np.concatenate(cm)
-        seg = np.linalg.norm(np.diff(self.xy, axis=0), axis=1)
-        self.s = np.r_[0.0, np.cumsum(seg)]
+        self.in_corner = np.repeat(np.array(piece_corner, dtype=bool), piece_len)
+        d = np.diff(self.xy, axis=0)
+        seg = np.linalg.norm(d, axis=1)
+        self.s = np.concatenate(([0.0], np.cumsum(seg)))
         self.speed_limit = np.array([r.speed_limit for r in roads], dtype=float)[self.road_index]
         self.lane_offset = np.array(offsets, dtype=float)[self.road_index]
         js = self.s[np.asarray(junction_index, dtype=int)] if junction_index else np.zeros(0)
         # the stop line of a smooth join (no corner) is still ``corner_length`` before the node
         self.junction_s = np.maximum(js - np.where(np.asarray(smooth, dtype=bool), corner_length, 0.0), 0.0)
-        self._t = np.diff(self.xy, axis=0) / np.maximum(seg, 1e-12)[:, None]
+        self._t = d / np.maximum(seg, 1e-12)[:, None]
         self._seg = seg
         # the same numbers as Python lists: the per-call scalar reads of project / locate / search are cheaper on them
         self._s_list: list[float] = self.s.tolist()

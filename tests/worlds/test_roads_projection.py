@@ -134,6 +134,7 @@ def test_compiled_table_evaluation_is_the_numpy_form(net):
         assert np.array_equal(xy, np.stack([x, y], axis=-1))
         assert np.array_equal(head, np.arctan2(np.sin(th), np.cos(th)))
         assert np.array_equal(kap, ka)
+        assert np.array_equal(road.heading(s), head)
     road = next(iter(net.roads.values()))
     grid = rng.uniform(0.0, road.length, (3, 4))
     assert road.point(grid).shape == (3, 4, 2) and road.heading(grid).shape == (3, 4)

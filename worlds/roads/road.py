@@ -150,12 +150,13 @@ class Road:
                     speed_limit=self.speed_limit, twin=self.id, sample_spacing=self.sample_spacing, _reverse_of=self)
 
     # ------------------------------------------------------------------ evaluation
-    def _interp(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Hermite evaluation at arc lengths ``s`` (already an array, any shape): x, y, theta, kappa, clipped s
-        (compiled, :func:`_hermite`)."""
+    def _interp(self, s: np.ndarray, wrap: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                                                  np.ndarray]:
+        """Hermite evaluation at arc lengths ``s`` (already an array, any shape): x, y, theta (wrapped to (-pi, pi]
+        when ``wrap``), kappa, clipped s (compiled, :func:`_hermite`)."""
         flat = np.ascontiguousarray(s, dtype=float).reshape(-1)
         out = np.empty((5, flat.size))
-        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, False)
+        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, wrap)
         x, y, th, ka, sc = (row.reshape(np.shape(s)) for row in out)
         return x, y, th, ka, sc
 
@@ -192,12 +193,8 @@ class Road:
         """(M, 2) centre-line points, (M,) headings (wrapped to (-pi, pi]) and (M,) curvatures at arc lengths ``s``
         (an array): what :meth:`point`, :meth:`heading` and :meth:`curvature` give, from one evaluation of the spline
         instead of three."""
-        flat = np.ascontiguousarray(s, dtype=float).reshape(-1)
-        out = np.empty((5, flat.size))
-        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, True)
-        shape = np.shape(s)
-        return np.stack([out[0].reshape(shape), out[1].reshape(shape)], axis=-1), out[2].reshape(shape), \
-            out[3].reshape(shape)
+        x, y, th, ka, _ = self._interp(s, wrap=True)
+        return np.stack([x, y], axis=-1), th, ka
 
     def tangent(self, s: float | np.ndarray) -> np.ndarray:
         """Unit tangent (direction of travel) at arc length ``s``; (2,) or (M, 2)."""
@@ -212,8 +209,7 @@ class Road:
         if np.ndim(s) == 0:
             th = self._interp1(float(s))[2]
             return math.atan2(math.sin(th), math.cos(th))
-        th = self._interp(np.asarray(s, dtype=float))[2]
-        return np.arctan2(np.sin(th), np.cos(th))
+        return self._interp(np.asarray(s, dtype=float), wrap=True)[2]
 
     def curvature(self, s: float | np.ndarray) -> float | np.ndarray:
         """Signed curvature ``d(heading)/ds`` at arc length ``s`` (1/m), positive when turning left (CCW)."""

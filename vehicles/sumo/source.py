@@ -51,10 +51,10 @@ _active: SumoTraffic | None = None  # the one libsumo simulation of this process
 _SHORT_REACH = 50.0  # m; slots moving less in a step are found through a k-d tree in sync_near, the others always
 
 
-
 def _nearest_d2(xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Squared distance (m²) from each of ``xy`` (n, 2) to the nearest of ``pts`` (k, 2)."""
     return ((xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+
 
 @dataclass(frozen=True, kw_only=True)
 class SumoTrafficConfig:

@@ -1,5 +1,6 @@
-"""Points projected onto roads, compiled: :meth:`~worlds.roads.road.Road.project` (:func:`project_one`) and its batch
-form over a network's roads, for :meth:`~worlds.roads.network.RoadNetwork.project_on` and ``nearest_many``.
+"""A road's table evaluated and points projected onto roads, compiled: :meth:`~worlds.roads.road.Road._interp`
+(:func:`hermite_many`), :meth:`~worlds.roads.road.Road.project` (:func:`project_one`) and its batch form over a
+network's roads, for :meth:`~worlds.roads.network.RoadNetwork.project_on` and ``nearest_many``.
 
 A projection takes the road's nearest table sample (points, headings, curvatures at its spacing), then
 osculating-circle steps to the foot point (at most ``MAX_PROJECT_STEPS``; clipped at the road's ends with the lateral
@@ -23,7 +24,7 @@ from numba import njit
 if TYPE_CHECKING:
     from worlds.roads.road import Road
 
-__all__ = ["MAX_PROJECT_STEPS", "RoadTables", "project_one", "project_pairs"]
+__all__ = ["MAX_PROJECT_STEPS", "RoadTables", "hermite_many", "project_one", "project_pairs"]
 
 MAX_PROJECT_STEPS = 8
 """Osculating-circle steps a projection takes at most."""
@@ -80,6 +81,22 @@ def _interp1(xy, th_t, ka_t, o, n, h, length, s):  # pragma: no cover - compiled
     th = h00 * th0 + h10 * h * k0 + h01 * th1 + h11 * h * k1
     ka = ((6 * u2 - 6 * u) * th0 + (6 * u - 6 * u2) * th1) / h + (3 * u2 - 4 * u + 1) * k0 + (3 * u2 - 2 * u) * k1
     return x, y, th, ka
+
+
+@njit(cache=True)
+def hermite_many(xy, th_t, ka_t, h, n, length, s, out, wrap):  # pragma: no cover - compiled
+    """:func:`_interp1` of a road's table (rows ``0 .. n``) at each arc length of ``s`` (M,): x, y, theta (wrapped to
+    (-pi, pi] by ``atan2(sin, cos)`` when ``wrap``), kappa and the clipped arc length into the rows of ``out`` (5, M);
+    :meth:`Road._interp` is this. The operations, in their order, of the vectorised NumPy form it replaced, so the
+    numbers are the same (tested); a NaN arc length raises (it has no table interval)."""
+    for i in range(s.shape[0]):
+        si = s[i]
+        if si != si:
+            raise ValueError("Road: arc length is NaN")
+        x, y, th, ka = _interp1(xy, th_t, ka_t, 0, n, h, length, si)
+        out[0, i], out[1, i], out[3, i] = x, y, ka
+        out[2, i] = math.atan2(math.sin(th), math.cos(th)) if wrap else th
+        out[4, i] = min(max(si, 0.0), length)
 
 
 @njit(cache=True)

@@ -36,9 +36,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
-from worlds.roads.projection import MAX_PROJECT_STEPS, project_one
+from worlds.roads.projection import MAX_PROJECT_STEPS, hermite_many, project_one
 from worlds.roads.spline import knots, line_table, spline_table
 
 __all__ = ["Road"]
@@ -153,10 +152,10 @@ class Road:
     def _interp(self, s: np.ndarray, wrap: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                                                   np.ndarray]:
         """Hermite evaluation at arc lengths ``s`` (already an array, any shape): x, y, theta (wrapped to (-pi, pi]
-        when ``wrap``), kappa, clipped s (compiled, :func:`_hermite`)."""
+        when ``wrap``), kappa, clipped s (compiled, :func:`~worlds.roads.projection.hermite_many`)."""
         flat = np.ascontiguousarray(s, dtype=float).reshape(-1)
         out = np.empty((5, flat.size))
-        _hermite(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, wrap)
+        hermite_many(self._xy, self._th, self._ka, self._h, self._n, self.length, flat, out, wrap)
         x, y, th, ka, sc = (row.reshape(np.shape(s)) for row in out)
         return x, y, th, ka, sc
 
@@ -278,31 +277,3 @@ class Road:
     def samples(self) -> np.ndarray:
         """(N+1, 2) read-only table of centre-line points at uniform arc-length spacing ``length / N`` (m)."""
         return self._xy
-
-
-@njit(cache=True)
-def _hermite(xy: np.ndarray, th: np.ndarray, ka: np.ndarray, h: float, n: int, length: float, s: np.ndarray,
-             out: np.ndarray, wrap: bool) -> None:
-    """Cubic Hermite evaluation of a road's table (module docstring) at arc lengths ``s`` (M,): writes x, y, theta,
-    kappa and the clipped arc length into the rows of ``out`` (5, M); theta wrapped to (-pi, pi] by
-    ``atan2(sin, cos)`` when ``wrap``. The operations, in their order, of the vectorised NumPy form it replaced, so
-    the numbers are the same; a NaN arc length raises (it has no table interval)."""
-    for i in range(s.shape[0]):
-        si = s[i]
-        if si != si:
-            raise ValueError("Road: arc length is NaN")
-        si = min(max(si, 0.0), length)
-        q = si / h
-        j = min(int(q), n - 1)
-        u = q - j
-        u2, u3 = u * u, u * u * u
-        h00, h10, h01, h11 = 2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, 3 * u2 - 2 * u3, u3 - u2
-        th0, th1, k0, k1 = th[j], th[j + 1], ka[j], ka[j + 1]
-        c0, s0, c1, s1 = math.cos(th0), math.sin(th0), math.cos(th1), math.sin(th1)
-        out[0, i] = h00 * xy[j, 0] + h10 * h * c0 + h01 * xy[j + 1, 0] + h11 * h * c1
-        out[1, i] = h00 * xy[j, 1] + h10 * h * s0 + h01 * xy[j + 1, 1] + h11 * h * s1
-        t = h00 * th0 + h10 * h * k0 + h01 * th1 + h11 * h * k1
-        out[2, i] = math.atan2(math.sin(t), math.cos(t)) if wrap else t
-        d00, d10, d01, d11 = 6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, 6 * u - 6 * u2, 3 * u2 - 2 * u
-        out[3, i] = (d00 * th0 + d01 * th1) / h + d10 * k0 + d11 * k1
-        out[4, i] = si

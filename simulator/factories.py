@@ -15,6 +15,7 @@ __all__ = [
     "build_channel",
     "channel_config",
     "fleet_options",
+    "sumo_net_config",
 ]
 
 def channel_config(comms: CommsSection) -> Any:
@@ -56,10 +57,12 @@ def fleet_options(world: World) -> Any:
                         outer_loop_hz=world.uavs[0].outer_loop_hz if world.uavs else FleetOptions().outer_loop_hz)
 
 
-def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
+def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rng: Any,
+                    signals: tuple[str, ...] = ()) -> Any:
     """The ground vehicles, their drivers, routes and dynamics (physics multibody or kinematic box), and SUMO's
     slots when the world's traffic engine is SUMO (the last ``traffic.cars`` entries, added by
-    :func:`worlds.traffic.with_traffic`)."""
+    :func:`worlds.traffic.with_traffic`), with traffic lights at the junctions ``signals`` by the section's ``tls``
+    (:func:`sumo_net_config`)."""
     from vehicles.car.driver_config import DriverConfig
     from vehicles.car.fleet import CarFleet
     from vehicles.car.params import load_car
@@ -69,7 +72,7 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
     sources = []
     if world.traffic.engine == "sumo" and world.traffic.cars:
         listed = listed[:-world.traffic.cars]
-        sources.append(_sumo(world, network, client, physics_hz, rng.spawn(1)[0]))
+        sources.append(_sumo(world, network, client, physics_hz, rng.spawn(1)[0], signals))
     params, drivers, routes = [], [], []
     for g in listed:
         params.append(load_car(g.type))
@@ -88,13 +91,25 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
         raise
 
 
-def _sumo(world: World, network: Any, client: int, physics_hz: int, rng: Any) -> Any:
+def _sumo(world: World, network: Any, client: int, physics_hz: int, rng: Any, signals: tuple[str, ...]) -> Any:
     """SUMO co-simulation of the world's traffic section, its network cached under the skytrack cache."""
     from vehicles.sumo import make_sumo_traffic
-    from vehicles.sumo.network import NetConfig
     from worlds.map_cache import cache_root
 
     spec = world.traffic
     return make_sumo_traffic(network, n_vehicles=spec.cars, rate_hz=spec.rate_hz, physics_hz=physics_hz,
                              client_id=client, rng=rng, work_dir=cache_root() / "sumo", car=spec.types[0],
-                             net=NetConfig(tls=spec.tls))
+                             net=sumo_net_config(spec.tls, signals))
+
+
+def sumo_net_config(tls: str, signals: tuple[str, ...]) -> Any:
+    """The SUMO network options of a traffic section's ``tls`` with the junctions the map's signals control:
+    ``map`` lights those only, ``guess`` those and netconvert's guess elsewhere, ``none`` none, ``auto`` is ``map``
+    when there are any and ``guess`` otherwise."""
+    from vehicles.sumo.network import NetConfig
+
+    if tls == "auto":
+        tls = "map" if signals else "guess"
+    if tls not in ("map", "guess", "none"):
+        raise ValueError(f"traffic.tls must be 'auto', 'map', 'guess' or 'none', got {tls!r}")
+    return NetConfig(tls="guess" if tls == "guess" else "none", signals=() if tls == "none" else tuple(signals))

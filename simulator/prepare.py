@@ -225,7 +225,7 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     cars, car_kinds = None, ()
     if world.ground_vehicles:
         cars = build_car_fleet(world, geometry.network, scene.client, clock.physics_hz,
-                               seeds.generator("vehicles/cars"))
+                               seeds.generator("vehicles/cars"), geometry.signals)
         car_kinds = tuple("decoy" if g.role == "decoy" else "car" for g in world.ground_vehicles)
         for body in cars.body_ids:  # paint the bodies in the colour the camera detector looks for
             p.changeVisualShape(int(body), -1, rgbaColor=CAR_RGBA, physicsClientId=scene.client)

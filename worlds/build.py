@@ -18,6 +18,7 @@ import numpy as np
 from worlds.errors import WorldError, WorldIssue
 from worlds.geometry import Building
 from worlds.roads.network import RoadNetwork
+from worlds.roads.signals import signalised_junctions
 from worlds.schema import World
 
 __all__ = ["WorldGeometry", "build_geometry", "resolve_map_path"]
@@ -35,11 +36,15 @@ class WorldGeometry:
         Every building.
     road_mesh : Any
         ``trimesh.Trimesh`` of the road surface (None without roads).
+    signals : tuple[str, ...]
+        Junction node ids the map's traffic signals control (:func:`worlds.roads.signals.signalised_junctions`);
+        empty when the road source marks no signals (explicit streets, procedural towns).
     """
 
     network: RoadNetwork | None
     buildings: list[Building]
     road_mesh: Any
+    signals: tuple[str, ...] = ()
 
 
 def resolve_map_path(path: str, world_file: Path) -> Path:
@@ -60,6 +65,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
     mesh = None
     network: RoadNetwork | None = None
     buildings: list[Building] = []
+    signals: tuple[str, ...] = ()
     where = "roads"
     try:
         if roads.streets:
@@ -85,6 +91,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
             path = resolve_map_path(roads.osm.path, world_file)
             town, mesh = _import_osm(path, roads.osm.bbox, roads.osm.default_height)
             network, buildings = town.network, list(town.buildings)
+            signals = signalised_junctions(network, town.signals)
     except WorldError:
         raise
     except (ValueError, TypeError, OSError) as exc:
@@ -111,7 +118,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
         from worlds.roads.mesh import road_surface_mesh
 
         mesh = road_surface_mesh(network)
-    return WorldGeometry(network=network, buildings=buildings, road_mesh=mesh)
+    return WorldGeometry(network=network, buildings=buildings, road_mesh=mesh, signals=signals)
 
 
 def _import_osm(path: Path, bbox: Any, default_height: float) -> tuple[Any, Any]:

@@ -16,6 +16,10 @@ Reading uses pyosmium (``osmium``). What becomes what:
   runs more than :data:`MAX_INSIDE_BUILDING` through building footprints is dropped (untagged driveways into garages
   and yards under buildings: in the simulated world cars would drive into walls). **Only the largest strongly
   connected component of the directed network is kept**, so every road can be reached from every other.
+* **Traffic signals.** Nodes tagged ``highway=traffic_signals`` or ``crossing=traffic_signals`` (a signalised
+  crossing, which in many cities is how the legs of a signalised junction are mapped), inside ``bbox`` if given, as
+  the town's ``signals`` (positions); :func:`worlds.roads.signals.signalised_junctions` says which junctions they
+  control.
 * **Buildings.** Areas (closed ways and multipolygon relations) tagged ``building`` (not ``no``): each outer ring
   becomes a :class:`~worlds.geometry.Building` (inner rings, i.e. courtyards, are ignored). Height from ``height``
   (m, or ``ft``/``'``), else ``building:levels`` x :data:`LEVEL_HEIGHT`, else ``default_height``.
@@ -185,9 +189,10 @@ def load_osm(path: str | Path, *, bbox: tuple[float, float, float, float] | None
         bbox = tuple(float(v) for v in bbox)
         if len(bbox) != 4 or not (bbox[0] < bbox[2] and bbox[1] < bbox[3]):
             raise ValueError(f"load_osm: bbox must be (lon_min, lat_min, lon_max, lat_max) with min < max, got {bbox}")
-    ways, buildings, header_box = _read(path)
+    ways, buildings, signals, header_box = _read(path)
     if bbox is not None:
         ways = [part for way in ways for part in _clip_way(way, bbox)]
+        signals = signals[_inside(signals, bbox)]
     buildings = [b for b in buildings if bbox is None or all(_inside(r, bbox).all() for r in b.rings)]
     if not ways:
         raise OsmEmptyError(f"{path}: no drivable ways (highway={'|'.join(sorted(DRIVABLE))})"
@@ -204,11 +209,13 @@ def load_osm(path: str | Path, *, bbox: tuple[float, float, float, float] | None
     network = _largest_component(_clear_of_buildings(_build_network(ways, proj), blds))
     if not network.roads:
         raise OsmEmptyError(f"{path}: the drivable ways form no connected road network")
-    return Town(network=network, buildings=blds, origin_lonlat=proj.origin_lonlat)
+    return Town(network=network, buildings=blds, origin_lonlat=proj.origin_lonlat,
+                signals=proj(signals[:, 0], signals[:, 1]).reshape(-1, 2))
 
 
-def _read(path: Path) -> tuple[list[_RawWay], list[_RawBuilding], tuple[float, float] | None]:
-    """Drivable ways, building areas and the header box centre (lon, lat) of ``path``."""
+def _read(path: Path) -> tuple[list[_RawWay], list[_RawBuilding], np.ndarray, tuple[float, float] | None]:
+    """Drivable ways, building areas, traffic signals ((K, 2) lon/lat) and the header box centre (lon, lat) of
+    ``path``."""
     if not path.exists():
         raise OsmFileNotFoundError(f"{path}: OpenStreetMap extract not found")
     if path.is_dir():
@@ -221,17 +228,21 @@ def _read(path: Path) -> tuple[list[_RawWay], list[_RawBuilding], tuple[float, f
 
     ways: list[_RawWay] = []
     buildings: list[_RawBuilding] = []
+    signals: list[tuple[float, float]] = []
     try:
         fp = (osmium.FileProcessor(str(path))
               .with_areas(osmium.filter.KeyFilter("building"))
-              .with_filter(osmium.filter.KeyFilter("highway", "building")))
+              .with_filter(osmium.filter.KeyFilter("highway", "building", "crossing")))
         box = fp.header.box()
         header = None
         if box.valid():
             bl, tr = box.bottom_left, box.top_right
             header = ((bl.lon + tr.lon) / 2, (bl.lat + tr.lat) / 2)
         for obj in fp:
-            if obj.is_way() and obj.tags.get("highway") in DRIVABLE:
+            if obj.is_node():
+                if _is_signal(obj.tags) and obj.location.valid():
+                    signals.append((obj.location.lon, obj.location.lat))
+            elif obj.is_way() and obj.tags.get("highway") in DRIVABLE:
                 tags = dict(obj.tags)
                 if _excluded(tags):
                     continue
@@ -243,7 +254,12 @@ def _read(path: Path) -> tuple[list[_RawWay], list[_RawBuilding], tuple[float, f
                 buildings.append(_RawBuilding(bid, dict(obj.tags), rings))
     except (RuntimeError, ValueError, OSError) as exc:
         raise OsmFormatError(f"{path}: cannot be read as OpenStreetMap data ({exc})") from exc
-    return ways, buildings, header
+    return ways, buildings, np.array(signals, dtype=float).reshape(-1, 2), header
+
+
+def _is_signal(tags) -> bool:
+    """A node that is a traffic signal: ``highway=traffic_signals``, or a crossing with ``crossing=traffic_signals``."""
+    return tags.get("highway") == "traffic_signals" or tags.get("crossing") == "traffic_signals"
 
 
 def _excluded(tags: dict[str, str]) -> bool:

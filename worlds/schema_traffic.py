@@ -90,8 +90,11 @@ class TrafficSpec(Strict):
     engine: Literal["builtin", "sumo"] = Field("builtin", description="what drives the traffic: 'builtin' = the "
                                                "compiled fleet of skytrack's own driver; 'sumo' = SUMO in process "
                                                "(pip install 'skytrack[traffic]')")
-    tls: Literal["guess", "none"] = Field("guess", description="sumo only: traffic lights where netconvert guesses "
-                                                               "them ('guess') or none (priority junctions)")
+    tls: Literal["auto", "map", "guess", "none"] = Field(
+        "auto", description="sumo only: traffic lights at the junctions the map's signals control ('map'; OSM "
+                            "highway=traffic_signals and signalised crossings), those plus netconvert's guess "
+                            "elsewhere ('guess'), none at all (priority junctions: 'none'), or 'map' when the map "
+                            "marks signals and 'guess' when it does not ('auto')")
     cars: int = Field(0, ge=0, le=5000, description="number of traffic cars to generate, 0 to 5000")
     rate_hz: int = Field(20, gt=0, description="the traffic drivers' update rate, Hz; must divide sim.physics_hz")
     types: list[str] = Field(default_factory=lambda: ["sedan", "van"], min_length=1,

@@ -145,11 +145,16 @@ class Town:
         Building footprints and heights (m).
     origin_lonlat : tuple[float, float] | None
         (longitude, latitude) in degrees of the local ENU origin for imported maps; None for synthetic towns.
+    signals : np.ndarray
+        (K, 2) positions (m) of the traffic signals the map marks (OpenStreetMap ``highway=traffic_signals`` and
+        signalised crossings); (0, 2) when it marks none, as in synthetic towns. Which junctions they control:
+        :func:`worlds.roads.signals.signalised_junctions`.
     """
 
     network: RoadNetwork
     buildings: list[Building] = field(default_factory=list)
     origin_lonlat: tuple[float, float] | None = None
+    signals: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def bounds(self) -> tuple[float, float, float, float]:
         """(x_min, y_min, x_max, y_max) over road samples and building footprints (m)."""

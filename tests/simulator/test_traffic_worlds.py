@@ -82,3 +82,41 @@ def test_a_world_of_sumo_traffic_alone_runs(tmp_path):
     res = run("road_standoff", duration=3.0, seed=1, out_dir=tmp_path / "d", overrides=["ground_vehicles=[]", *SUMO])
     assert res.status == "completed"
     assert len(set(_truth(res)["vehicle"].tolist())) == 40
+
+
+def test_the_maps_signals_become_sumos_traffic_lights(monkeypatch):
+    """tls: auto lights the junctions the map's signals control (helsinki_traffic: OSM signals), else netconvert's
+    guess; the world's geometry carries the junctions to SUMO's network options."""
+    from simulator.factories import build_car_fleet, sumo_net_config
+    from vehicles.sumo.network import NetConfig
+    from worlds.build import build_geometry
+
+    lit = ("a", "b")
+    assert sumo_net_config("auto", lit) == NetConfig(tls="none", signals=lit)
+    assert sumo_net_config("auto", ()) == NetConfig(tls="guess", signals=())
+    assert sumo_net_config("map", lit) == NetConfig(tls="none", signals=lit)
+    assert sumo_net_config("guess", lit) == NetConfig(tls="guess", signals=lit)
+    assert sumo_net_config("none", lit) == NetConfig(tls="none", signals=())
+    with pytest.raises(ValueError, match="traffic.tls must be 'auto', 'map', 'guess' or 'none', got 'osm'"):
+        sumo_net_config("osm", lit)
+
+    loaded = load_world("helsinki_traffic", ["traffic.cars=10"])
+    geometry = build_geometry(loaded.world, loaded.path, np.random.default_rng(0))
+    assert len(geometry.signals) > 30 and set(geometry.signals) <= set(geometry.network.nodes)
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def fake(network, **kw):
+        seen.update(kw)
+        raise Stop
+
+    monkeypatch.setattr("vehicles.sumo.make_sumo_traffic", fake)
+    with pytest.raises(Stop):
+        build_car_fleet(loaded.world, geometry.network, 0, 240, np.random.default_rng(0), geometry.signals)
+    assert seen["net"] == NetConfig(tls="none", signals=geometry.signals)
+    with pytest.raises(Stop):
+        build_car_fleet(load_world("helsinki_traffic", ["traffic.cars=10", "traffic.tls=guess"]).world,
+                        geometry.network, 0, 240, np.random.default_rng(0), geometry.signals)
+    assert seen["net"] == NetConfig(tls="guess", signals=geometry.signals)

@@ -93,3 +93,21 @@ def test_net_config_checks() -> None:
         NetConfig(tls="osm")
     with pytest.raises(ValueError, match="NetConfig.shape_spacing must be > 0 m, got 0"):
         NetConfig(shape_spacing=0)
+
+
+def test_signalised_junctions_within_20_m_run_one_program(tmp_path) -> None:
+    """Two lit junctions 15 m apart (a divided road's two carriageways crossed by a street) get one traffic-light
+    program (netconvert --tls.join); lit junctions 150 m apart keep one each."""
+    nodes = {"A": [0, 0], "B": [15, 0], "W": [-150, 0], "E": [165, 0], "AN": [0, 150], "AS": [0, -150],
+             "BN": [15, 150], "BS": [15, -150]}
+    streets = [{"id": "wa", "nodes": ["W", "A"]}, {"id": "ab", "nodes": ["A", "B"]}, {"id": "be", "nodes": ["B", "E"]},
+               {"id": "na", "nodes": ["AN", "A"], "two_way": False},
+               {"id": "as", "nodes": ["A", "AS"], "two_way": False},
+               {"id": "sb", "nodes": ["BS", "B"], "two_way": False},
+               {"id": "bn", "nodes": ["B", "BN"], "two_way": False}]
+    near = RoadNetwork.from_spec({"nodes": nodes, "streets": streets})
+    root = ET.parse(build_sumo_net(near, tmp_path, NetConfig(tls="none", signals=("A", "B"))).net_file).getroot()
+    assert len(root.findall("tlLogic")) == 1
+    assert sorted(j.get("id") for j in root.iter("junction") if j.get("type") == "traffic_light") == ["A", "B"]
+    far = ET.parse(build_sumo_net(_network(), tmp_path, NetConfig(tls="none", signals=("1_1", "1_2"))).net_file)
+    assert sorted(t.get("id") for t in far.getroot().iter("tlLogic")) == ["1_1", "1_2"]

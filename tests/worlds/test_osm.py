@@ -10,6 +10,7 @@ import shapely
 from shapely.geometry import LineString
 
 from worlds.osm import (LocalTangentPlane, OsmEmptyError, OsmError, OsmFileNotFoundError, OsmFormatError, load_osm)
+from worlds.roads.signals import JOIN_M, ON_ROAD_M, junctions, signalised_junctions
 
 HELSINKI = Path(__file__).resolve().parents[2] / "assets" / "maps" / "helsinki.osm.pbf"
 LON0, LAT0 = 24.94, 60.17
@@ -50,11 +51,17 @@ WAYS = [  # (id, node refs, tags)
 RELATIONS = [(300, [(203, "outer"), (204, "inner")], {"type": "multipolygon", "building": "yes", "height": "40 ft"})]
 
 
-def _write_osm(path: Path) -> Path:
+def _write_osm(path: Path, node_tags: dict[int, dict[str, str]] | None = None) -> Path:
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', '<osm version="0.6" generator="test">']
     for nid, (x, y) in NODES.items():
         lon, lat = _lonlat(x, y)
-        lines.append(f'  <node id="{nid}" version="1" lat="{lat:.8f}" lon="{lon:.8f}"/>')
+        tags = (node_tags or {}).get(nid, {})
+        if not tags:
+            lines.append(f'  <node id="{nid}" version="1" lat="{lat:.8f}" lon="{lon:.8f}"/>')
+            continue
+        lines.append(f'  <node id="{nid}" version="1" lat="{lat:.8f}" lon="{lon:.8f}">')
+        lines += [f'    <tag k="{k}" v="{v}"/>' for k, v in tags.items()]
+        lines.append("  </node>")
     for wid, refs, tags in WAYS:
         lines.append(f'  <way id="{wid}" version="1">')
         lines += [f'    <nd ref="{r}"/>' for r in refs]
@@ -143,6 +150,25 @@ def test_bbox_crop(tmp_path):
         load_osm(path, bbox=(far[0], far[1], far[0] + 0.01, far[1] + 0.01))
 
 
+def test_traffic_signals_are_read_and_control_their_junction(small, tmp_path):
+    """Signal nodes (highway=traffic_signals, crossing=traffic_signals) become the town's signals at their nodes'
+    positions; other node tags do not; bbox keeps those inside; the signal on node 2 (ways 100 and 101 meet there)
+    lights that junction, the crossing on the footway's end (node 8, off the network) none."""
+    assert small.signals.shape == (0, 2)  # the extract without node tags
+    tags = {2: {"highway": "traffic_signals"}, 8: {"highway": "crossing", "crossing": "traffic_signals"},
+            3: {"highway": "give_way"}, 1: {"crossing": "uncontrolled", "highway": "crossing"}}
+    town = load_osm(_write_osm(tmp_path / "signals.osm", tags))
+    assert town.signals.shape == (2, 2)
+    proj = LocalTangentPlane(town.origin_lonlat)
+    lonlat = np.array([_lonlat(*NODES[2]), _lonlat(*NODES[8])])
+    np.testing.assert_allclose(town.signals, proj(lonlat[:, 0], lonlat[:, 1]), atol=0.01)  # OSM keeps 1e-7 deg
+    np.testing.assert_allclose(town.signals[0], town.network.nodes["2"], atol=1e-9)
+    assert signalised_junctions(town.network, town.signals) == ("2",)
+    lo, hi = _lonlat(-10, -10), _lonlat(110, 110)
+    cropped = load_osm(tmp_path / "signals.osm", bbox=(lo[0], lo[1], hi[0], hi[1]))
+    assert cropped.signals.shape == (1, 2)
+
+
 def test_local_tangent_plane_closed_form():
     """1e-3 deg steps from the origin map to the WGS84 meridian and parallel radii of curvature (to 1e-6)."""
     a, f = 6378137.0, 1 / 298.257223563
@@ -174,6 +200,17 @@ def test_helsinki_network(helsinki):
     x0, y0, x1, y1 = helsinki.bounds()
     assert -600 < x0 and x1 < 600 and -900 < y0 and y1 < 900
     assert helsinki.origin_lonlat == pytest.approx(((24.9351762 + 24.9534145) / 2, (60.1641550 + 60.1791130) / 2))
+
+
+def test_helsinki_signals_light_junctions_near_them(helsinki):
+    """The extract maps some 470 signals (132 highway=traffic_signals nodes, the rest signalised crossings); the
+    junctions they control are junctions, each with a signal within reach."""
+    assert 400 < len(helsinki.signals) < 550
+    lit = signalised_junctions(helsinki.network, helsinki.signals)
+    joints = junctions(helsinki.network)
+    assert 30 < len(lit) < len(joints) and set(lit) <= set(joints)
+    for node in lit:
+        assert np.min(np.hypot(*(helsinki.signals - helsinki.network.nodes[node]).T)) <= JOIN_M + ON_ROAD_M
 
 
 def test_helsinki_centre_lines_follow_the_map(helsinki):

@@ -12,7 +12,9 @@ without a twin (one-way) has its lanes centred on its centre-line, which is SUMO
 every lane short where it enters a junction's polygon and joins the lanes across the junction with internal lanes
 (ids beginning ``":"``); outside junctions its lane centres lie on skytrack's (tested to 1 cm on straight roads).
 
-Traffic lights: junctions listed in ``signals`` get one (``type="traffic_light"``); with ``tls="guess"`` netconvert
+Traffic lights: junctions listed in ``signals`` get one (``type="traffic_light"``; a world's are the junctions its
+map's signals control, :func:`worlds.roads.signals.signalised_junctions`), and those within 20 m of each other run
+one program (``--tls.join``: the carriageways of a divided road crossing a street); with ``tls="guess"`` netconvert
 also guesses lights at the other junctions by its own rule (``--tls.guess``: junctions of fast roads); with
 ``tls="none"`` the rest are priority junctions (right before left between equal roads).
 
@@ -169,8 +171,9 @@ def build_sumo_net(network: RoadNetwork, work_dir: str | Path, config: NetConfig
     config = config or NetConfig()
     nodes_xml, edges_xml, _, road_ids = plain_xml(network, config)
     turn = ["--no-turnarounds.except-deadend", "true"] if config.no_turnarounds else []
+    join = ["--tls.join", "true"] if config.signals else []  # lights of junctions within 20 m run one program
     args = ["--offset.disable-normalization", "true", *turn, "--tls.guess", str(config.tls == "guess").lower(),
-            "--junctions.corner-detail", "5", "--no-warnings", "true"]
+            *join, "--junctions.corner-detail", "5", "--no-warnings", "true"]
     digest = hashlib.sha256("\n".join([nodes_xml, edges_xml, *args]).encode()).hexdigest()[:16]
     work = Path(work_dir)
     work.mkdir(parents=True, exist_ok=True)

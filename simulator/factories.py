@@ -96,10 +96,15 @@ def _sumo(world: World, network: Any, client: int, physics_hz: int, rng: Any, si
     from vehicles.sumo import make_sumo_traffic
     from worlds.map_cache import cache_root
 
+    from vehicles.sumo.demand import DemandConfig, Flow
+
     spec = world.traffic
-    return make_sumo_traffic(network, n_vehicles=spec.cars, rate_hz=spec.rate_hz, physics_hz=physics_hz,
-                             client_id=client, rng=rng, work_dir=cache_root() / "sumo", car=spec.types[0],
-                             net=sumo_net_config(spec.tls, signals))
+    flows = tuple(Flow(origin=f.origin, destination=f.destination, per_hour=f.per_hour, begin_s=f.begin_s,
+                       end_s=math.inf if f.end_s is None else f.end_s) for f in spec.flows)
+    return make_sumo_traffic(network, n_vehicles=spec.sumo_trips, n_slots=spec.cars, rate_hz=spec.rate_hz,
+                             physics_hz=physics_hz, client_id=client, rng=rng, work_dir=cache_root() / "sumo",
+                             car=spec.types[0], net=sumo_net_config(spec.tls, signals),
+                             demand=DemandConfig(flows=flows))
 
 
 def sumo_net_config(tls: str, signals: tuple[str, ...]) -> Any:

@@ -110,6 +110,12 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
                     sample = ", ".join(list(network.roads)[:6])
                     issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; "
                                                        f"a street 's' gives roads 's.f' and 's.r')"))
+        for i, f in enumerate(world.traffic.flows):
+            for key, rid in (("from", f.origin), ("to", f.destination)):
+                if rid not in network.roads:
+                    sample = ", ".join(list(network.roads)[:6])
+                    issues.append(WorldIssue(f"traffic.flows[{i}].{key}", rid, f"a road id of the network (e.g. "
+                                                                               f"{sample})"))
     issues += _starts_in_buildings(world, buildings[:len(buildings) - len(world.buildings)])
     if issues:
         raise WorldError(file, issues)

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from pydantic import ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from worlds.catalog import CAR_COLOURS, CAR_TYPES
 from worlds.schema_base import NonNegFloat, PositiveFloat, Strict
 
-__all__ = ["DriverSpec", "TrafficSpec"]
+__all__ = ["DriverSpec", "FlowSpec", "TrafficSpec"]
 
 
 class DriverSpec(Strict):
@@ -76,6 +76,25 @@ class DriverSpec(Strict):
         return self
 
 
+class FlowSpec(Strict):
+    """A stream of SUMO vehicles from the start of one road to the end of another along SUMO's fastest route,
+    departing as a Poisson process (:class:`vehicles.sumo.demand.Flow`)."""
+
+    model_config = ConfigDict(populate_by_name=True)
+
+    origin: str = Field(alias="from", min_length=1, description="road id the vehicles depart from (its start)")
+    destination: str = Field(alias="to", min_length=1, description="road id the vehicles arrive on (its end)")
+    per_hour: float = Field(gt=0, le=36000.0, description="mean departures per hour (Poisson), in (0, 36000]")
+    begin_s: NonNegFloat = Field(0.0, description="first second of departures, s")
+    end_s: PositiveFloat | None = Field(None, description="departures stop here, s (> begin_s); none: never")
+
+    @model_validator(mode="after")
+    def _window(self) -> FlowSpec:
+        if self.end_s is not None and not self.end_s > self.begin_s:
+            raise ValueError(f"end_s > begin_s ({self.begin_s:g} s), got end_s {self.end_s:g}")
+        return self
+
+
 class TrafficSpec(Strict):
     """Background traffic besides the world's listed ``ground_vehicles``, ``cars`` of role traffic. They join the
     ground vehicles as ``<id_prefix>1`` .. ``<id_prefix>N`` after the listed ones, so sensors, trackers, metrics and
@@ -95,7 +114,12 @@ class TrafficSpec(Strict):
                             "highway=traffic_signals and signalised crossings), those plus netconvert's guess "
                             "elsewhere ('guess'), none at all (priority junctions: 'none'), or 'map' when the map "
                             "marks signals and 'guess' when it does not ('auto')")
-    cars: int = Field(0, ge=0, le=5000, description="number of traffic cars to generate, 0 to 5000")
+    cars: int = Field(0, ge=0, le=5000, description="number of traffic cars to generate, 0 to 5000 (sumo: the scene "
+                                                    "slots, the most vehicles on the road at once)")
+    trips: int | None = Field(None, ge=0, le=5000, description="sumo only: random trips kept on the road, at most "
+                                                               "cars; default cars without flows, 0 with them")
+    flows: list[FlowSpec] = Field(default_factory=list, description="sumo only: vehicle flows between roads, on the "
+                                                                    "slots the trips leave")
     rate_hz: int = Field(20, gt=0, description="the traffic drivers' update rate, Hz; must divide sim.physics_hz")
     types: list[str] = Field(default_factory=lambda: ["sedan", "van"], min_length=1,
                              description="car types, cycled over the generated cars (sumo: the first, for all)")
@@ -117,6 +141,22 @@ class TrafficSpec(Strict):
         if bad:
             raise ValueError(f"{what} ({', '.join(known)}), got {bad}")
         return value
+
+    @model_validator(mode="after")
+    def _demand(self) -> TrafficSpec:
+        if self.engine != "sumo" and (self.flows or self.trips is not None):
+            raise ValueError("trips and flows need engine: sumo (the built-in cars drive random walks from their "
+                             "starts)")
+        if self.trips is not None and self.trips > self.cars:
+            raise ValueError(f"trips <= cars ({self.cars}, the scene slots), got trips {self.trips}")
+        if self.flows and self.cars - self.sumo_trips < 1:
+            raise ValueError(f"flows need slots the trips leave: cars ({self.cars}) > trips ({self.sumo_trips})")
+        return self
+
+    @property
+    def sumo_trips(self) -> int:
+        """Random trips SUMO keeps on the road: ``trips``, else ``cars`` without flows and 0 with them."""
+        return self.trips if self.trips is not None else (0 if self.flows else self.cars)
 
     @model_validator(mode="after")
     def _rate_is_the_sections(self) -> TrafficSpec:

@@ -120,3 +120,33 @@ def test_the_maps_signals_become_sumos_traffic_lights(monkeypatch):
         build_car_fleet(load_world("helsinki_traffic", ["traffic.cars=10", "traffic.tls=guess"]).world,
                         geometry.network, 0, 240, np.random.default_rng(0), geometry.signals)
     assert seen["net"] == NetConfig(tls="guess", signals=geometry.signals)
+
+
+FLOWS = ["traffic.engine=sumo", "traffic.cars=12", "traffic.rate_hz=10", "traffic.trips=4",
+         "traffic.flows=[{from: h0_0.f, to: h5_0.f, per_hour: 1800}, {from: h5_0.r, to: h0_0.r, per_hour: 900}]"]
+
+
+def test_a_world_with_sumo_flows_runs_them_beside_its_trips(tmp_path):
+    res = run("road_standoff", duration=20.0, seed=2, out_dir=tmp_path / "f", overrides=FLOWS)
+    assert res.status == "completed"
+    departs = [e["vehicle"] for e in res.record.events if e["type"] == "traffic_depart"]
+    n0, n1 = sum(v.startswith("f0_") for v in departs), sum(v.startswith("f1_") for v in departs)
+    # Poisson means 10 and 5 over 20 s (99.9 % bands), a few still waiting to enter; the 4 trips besides them
+    assert 1 <= n0 <= 21 and 0 <= n1 <= 13 and n0 + n1 >= 4
+    assert sum(v.startswith("t") for v in departs) >= 4
+    assert res.metrics["events"].get("traffic_flow_refused", 0) == 0  # 8 slots are plenty
+
+
+def test_flows_and_trips_are_checked_against_the_engine_slots_and_roads():
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", ["traffic.cars=4", "traffic.flows=[{from: h0_0.f, to: h5_0.f, per_hour: 60}]"])
+    assert "traffic" in str(info.value) and "need engine: sumo" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", [*SUMO, "traffic.trips=41"])
+    assert "trips <= cars (40, the scene slots), got trips 41" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", [*SUMO, "traffic.flows=[{from: a, to: b, per_hour: 60, begin_s: 9, end_s: 3}]"])
+    assert "end_s > begin_s (9 s), got end_s 3" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        run("road_standoff", duration=1.0, overrides=[*SUMO, "traffic.flows=[{from: h0_0.f, to: nope, per_hour: 60}]"])
+    assert "traffic.flows[0].to" in str(info.value) and "'nope'" in str(info.value)

@@ -293,3 +293,72 @@ def test_config_checks() -> None:
     with pytest.raises(ValueError, match=r"SumoTrafficConfig.n_slots must be >= n_vehicles \(5\) and >= 1, got 4"):
         SumoTrafficConfig(n_vehicles=5, n_slots=4)
     assert SumoTrafficConfig(n_vehicles=1, n_slots=1, rate_hz=20, physics_hz=240).period == 12
+
+
+@needs_sumo
+def test_flows_depart_as_poisson_processes_along_their_route(client, work_dir) -> None:
+    """Flow 0 sends 1200 vehicles/h (Poisson) from h0_0.f to h2_3.f over 120 s, flow 1 2400/h within [30, 60) s (a
+    lane takes some 1800/h): departure counts within the 99.9 % Poisson bands of means 40 and 20, every vehicle
+    departs (a few may still wait to enter at the end) and is first seen on its flow's origin."""
+    from vehicles.sumo.demand import DemandConfig, Flow
+
+    flows = (Flow(origin="h0_0.f", destination="h2_3.f", per_hour=1200.0),
+             Flow(origin="v3_0.f", destination="h0_3.r", per_hour=2400.0, begin_s=30.0, end_s=60.0))
+    net = _grid()
+    tr = _traffic(net, client, work_dir, n_vehicles=0, n_slots=300, demand=DemandConfig(flows=flows))
+    try:
+        first_road: dict[str, str] = {}
+        events, waiting = [], {}  # departed vehicles not yet on a road at a SUMO tick (SUMO runs a step ahead)
+        for tick in range(1, 120 * PHYSICS_HZ + 1):
+            tr.advance(tick, OtherCars.none())
+            ev = tr.pop_events()
+            events += ev
+            waiting.update({e["vehicle"]: (e["slot"], e["tick"]) for e in ev if e["type"] == "traffic_depart"})
+            if tick % PERIOD == 0:
+                ids, *_ = tr.road_positions(tick)
+                for v, (k, since) in list(waiting.items()):
+                    if tick >= since and ids[k]:  # the event comes a step ahead, with the tick the vehicle is on
+                        first_road[v] = ids[k]
+                        del waiting[v]
+        departs = [e["vehicle"] for e in events if e["type"] == "traffic_depart"]
+        n0, n1 = sum(v.startswith("f0_") for v in departs), sum(v.startswith("f1_") for v in departs)
+        assert 40 - 3.3 * 40**0.5 < tr._flows.departed[0] < 40 + 3.3 * 40**0.5
+        assert 20 - 3.3 * 20**0.5 < tr._flows.departed[1] < 20 + 3.3 * 20**0.5
+        assert tr._flows.refused == [0, 0] and n0 >= tr._flows.departed[0] - 2 and n1 == tr._flows.departed[1]
+        assert len(first_road) >= len(departs) - 2
+        assert all(road == ("h0_0.f" if v.startswith("f0_") else "v3_0.f") for v, road in first_road.items())
+    finally:
+        tr.close()
+
+
+@needs_sumo
+def test_flow_departures_beyond_the_free_slots_are_refused_and_counted(client, work_dir) -> None:
+    from vehicles.sumo.demand import DemandConfig, Flow
+
+    flows = (Flow(origin="h0_0.f", destination="h2_3.f", per_hour=36000.0),)
+    tr = _traffic(_grid(), client, work_dir, n_vehicles=2, n_slots=5, demand=DemandConfig(flows=flows))
+    try:
+        refused = 0
+        for tick in range(1, 10 * PHYSICS_HZ + 1):
+            tr.advance(tick, OtherCars.none())
+            refused += sum(e["type"] == "traffic_flow_refused" for e in tr.pop_events())
+            assert len(tr._flows.alive) <= 3 and tr.vehicles_on_road <= 5
+        assert refused == tr._flows.refused[0] > 0
+        total = refused + tr._flows.departed[0]  # the draws: Poisson of mean 100
+        assert 100 - 3.3 * 10 < total < 100 + 3.3 * 10
+    finally:
+        tr.close()
+
+
+@needs_sumo
+def test_a_flow_on_an_unknown_road_is_refused_and_sumo_closed(client, work_dir) -> None:
+    from vehicles.sumo.demand import DemandConfig, Flow
+
+    bad = DemandConfig(flows=(Flow(origin="h0_0.f", destination="nope", per_hour=60.0),))
+    with pytest.raises(ValueError, match="flow 0: destination 'nope' is not a road of the network"):
+        _traffic(_grid(), client, work_dir, n_vehicles=0, n_slots=4, demand=bad)
+    _traffic(_grid(), client, work_dir, n_vehicles=2, n_slots=4).close()  # libsumo was released
+    with pytest.raises(ValueError, match="Flow.per_hour must be finite and > 0"):
+        Flow(origin="a", destination="b", per_hour=0.0)
+    with pytest.raises(ValueError, match="0 <= begin_s < end_s required"):
+        Flow(origin="a", destination="b", per_hour=1.0, begin_s=5.0, end_s=5.0)

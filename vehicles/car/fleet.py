@@ -292,7 +292,8 @@ class CarFleet:
                                      for e in fleet.pop_events()]
         for idx, src in self.sources:
             src.advance(tick, self._others())
-            self._events += [(int(idx[e["car"]]), dict(e, car=int(idx[e["car"]]))) for e in src.pop_events()]
+            self._events += [(int(idx[e["car"]]), dict(e, car=int(idx[e["car"]]))) if "car" in e else (-1, dict(e))
+                             for e in src.pop_events()]  # a source's own events (a refused flow) name no car
         if self._phys and tick % self._every_gcd == 0:
             due = [i for i in self._phys if tick % self._every[i] == 0]
             if due:
@@ -354,8 +355,9 @@ class CarFleet:
 
     def pop_events(self) -> list[dict]:
         """Events since the last call, in the order of the ticks and, within a tick, of the cars: ``car_stop``,
-        ``car_go``, ``car_enter_road``, ``car_route_end``, ``car_left_road``, ``car_back_on_road``; each has ``type``,
-        ``car`` (index) and ``tick``."""
+        ``car_go``, ``car_enter_road``, ``car_route_end``, ``car_left_road``, ``car_back_on_road`` (and a traffic
+        source's: ``traffic_depart``, ``traffic_arrive``, ``traffic_flow_refused``); each has ``type`` and ``tick``,
+        and all but the source's own (``traffic_flow_refused``) ``car`` (index)."""
         ev, self._events = self._events, []
         ev.sort(key=lambda ie: (ie[1]["tick"], ie[0]))  # stable: a car's own events keep their order
         return [e for _, e in ev]

@@ -1,21 +1,63 @@
-"""Traffic demand for SUMO: a pool of N random trips kept full, one new trip for every vehicle that arrives.
+"""Traffic demand for SUMO: a pool of N random trips kept full, and flows between given roads.
 
-At the start N vehicles are inserted at random free positions on random edges (the network is full at once, no
-ramp-up); each later arrival is replaced by a new trip departing at the start of a random edge. Origins and
+Trips. At the start N vehicles are inserted at random free positions on random edges (the network is full at once,
+no ramp-up); each later arrival is replaced by a new trip departing at the start of a random edge. Origins and
 destinations are drawn from skytrack's own :class:`numpy.random.Generator` (spawned from the run's seed); the route is
 SUMO's fastest path between them (``simulation.findRoute``). Insertion positions, speeds and driver imperfection come
 from SUMO's own generator, seeded with ``--seed``. So the number of vehicles on the road stays near N (below it only
 while a new trip waits for room to enter), and one seed gives one run.
+
+Flows. A :class:`Flow` sends vehicles from the start of one road to the end of another along SUMO's fastest route
+between them, departing as a Poisson process of ``per_hour`` vehicles an hour within ``[begin_s, end_s)``: at each
+SUMO step the number of departures over the step's overlap with that window is drawn from the same generator
+(Poisson, mean ``per_hour / 3600 · overlap``), so a count over T seconds is Poisson with mean ``per_hour · T / 3600``.
+The flows share the scene slots the trips leave (``capacity``); a departure that would need more is refused and
+counted (:attr:`FlowStreams.refused`; the source records a ``traffic_flow_refused`` event), never queued unseen.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 
-__all__ = ["DemandConfig", "TripPool"]
+__all__ = ["DemandConfig", "Flow", "FlowStreams", "TripPool"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Flow:
+    """A stream of vehicles between two roads (see the module docstring).
+
+    Attributes
+    ----------
+    origin, destination : str
+        skytrack road ids: departures at the start of ``origin``, arrivals at the end of ``destination``.
+    per_hour : float
+        Mean departures per hour (> 0).
+    begin_s, end_s : float
+        Simulated seconds within which vehicles depart, ``0 <= begin_s < end_s`` (``end_s`` may be inf).
+    """
+
+    origin: str
+    destination: str
+    per_hour: float
+    begin_s: float = 0.0
+    end_s: float = math.inf
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.per_hour) and self.per_hour > 0):
+            raise ValueError(f"Flow.per_hour must be finite and > 0, got {self.per_hour!r}")
+        if not (math.isfinite(self.begin_s) and 0 <= self.begin_s < self.end_s):
+            raise ValueError(f"Flow: 0 <= begin_s < end_s required, got begin_s {self.begin_s!r}, end_s "
+                             f"{self.end_s!r}")
+
+    def expected(self, t0: float, t1: float) -> float:
+        """Mean departures in simulated seconds ``[t0, t1)``."""
+        overlap = max(0.0, min(t1, self.end_s) - max(t0, self.begin_s))
+        return self.per_hour / 3600.0 * overlap
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -36,6 +78,8 @@ class DemandConfig:
         Shortest route accepted for a trip (edges); shorter draws are drawn again.
     max_draws : int
         Draws of an origin-destination pair before a trip is given up (a network with unreachable parts).
+    flows : tuple[Flow, ...]
+        Flows besides the trips (departures at ``depart_pos``, ``depart_lane``, ``depart_speed``).
     """
 
     initial_depart_pos: str = "random_free"
@@ -44,8 +88,10 @@ class DemandConfig:
     depart_speed: str = "desired"
     min_route_edges: int = 2
     max_draws: int = 50
+    flows: tuple[Flow, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "flows", tuple(self.flows))
         if self.min_route_edges < 1:
             raise ValueError(f"DemandConfig.min_route_edges must be >= 1, got {self.min_route_edges}")
         if self.max_draws < 1:
@@ -110,3 +156,78 @@ class TripPool:
             if len(edges) >= self.config.min_route_edges:
                 return edges
         return None
+
+
+class FlowStreams:
+    """Inserts the vehicles of :class:`Flow` s into a running libsumo simulation (see the module docstring).
+
+    Parameters
+    ----------
+    lib : module
+        The started libsumo module.
+    flows : Sequence[Flow]
+        The flows.
+    road_to_edge : Mapping[str, str]
+        skytrack road id -> SUMO edge id.
+    rng : numpy.random.Generator
+        Draws the departures.
+    type_id : str
+        SUMO vehicle type.
+    config : DemandConfig
+        Insertion settings.
+    capacity : int
+        Most flow vehicles in SUMO at once (on the road or waiting to enter): the scene slots the trips leave.
+    prefix : str
+        Vehicle ids are ``f"{prefix}{k}_{j}"`` (flow k, its j-th vehicle), route ids ``f"{prefix}r{k}"``.
+
+    Raises
+    ------
+    ValueError
+        A flow's road is not in the network, or SUMO finds no route from its origin to its destination.
+    """
+
+    def __init__(self, lib: ModuleType, flows: Sequence[Flow], road_to_edge: Mapping[str, str],
+                 rng: np.random.Generator, type_id: str, config: DemandConfig, capacity: int,
+                 prefix: str = "f") -> None:
+        if capacity < 0:
+            raise ValueError(f"FlowStreams: capacity must be >= 0, got {capacity}")
+        self._lib, self._rng, self.flows = lib, rng, list(flows)
+        self.type_id, self.config, self.capacity, self.prefix = type_id, config, int(capacity), prefix
+        self.departed = [0] * len(self.flows)
+        self.refused = [0] * len(self.flows)
+        self.alive: set[str] = set()
+        for k, f in enumerate(self.flows):
+            for what, road in (("origin", f.origin), ("destination", f.destination)):
+                if road not in road_to_edge:
+                    raise ValueError(f"flow {k}: {what} {road!r} is not a road of the network")
+            a, b = road_to_edge[f.origin], road_to_edge[f.destination]
+            edges = [a] if a == b else list(lib.simulation.findRoute(a, b, vType=type_id).edges)
+            if not edges:
+                raise ValueError(f"flow {k}: no route from {f.origin!r} to {f.destination!r}")
+            lib.route.add(f"{prefix}r{k}", edges)
+
+    def owns(self, vehicle_id: str) -> bool:
+        """True when ``vehicle_id`` is one of the flows' vehicles."""
+        return vehicle_id.startswith(self.prefix)
+
+    def arrived(self, vehicle_id: str) -> None:
+        """``vehicle_id`` left SUMO: its room is free again."""
+        self.alive.discard(vehicle_id)
+
+    def depart(self, t0: float, t1: float) -> list[int]:
+        """Insert the departures of simulated seconds ``[t0, t1)``; the flow index of each refused one."""
+        cfg, refused = self.config, []
+        for k, f in enumerate(self.flows):
+            mean = f.expected(t0, t1)
+            for _ in range(int(self._rng.poisson(mean)) if mean > 0 else 0):
+                if len(self.alive) >= self.capacity:
+                    self.refused[k] += 1
+                    refused.append(k)
+                    continue
+                vid = f"{self.prefix}{k}_{self.departed[k]}"
+                self.departed[k] += 1
+                self._lib.vehicle.add(vid, f"{self.prefix}r{k}", typeID=self.type_id, depart="now",
+                                      departLane=cfg.depart_lane, departPos=cfg.depart_pos,
+                                      departSpeed=cfg.depart_speed)
+                self.alive.add(vid)
+        return refused

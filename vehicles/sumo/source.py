@@ -34,7 +34,7 @@ from vehicles.car.box_body import CarBoxBody
 from vehicles.car.params import CarParams, load_car
 from vehicles.car.traffic_source import OtherCars, TrafficPoses
 from vehicles.sumo._runtime import import_libsumo
-from vehicles.sumo.demand import DemandConfig, TripPool
+from vehicles.sumo.demand import DemandConfig, FlowStreams, TripPool
 from vehicles.sumo.network import NetConfig, SumoNet, build_sumo_net
 from vehicles.sumo.slots import SlotStates
 from worlds.roads.network import RoadNetwork
@@ -175,6 +175,10 @@ class SumoTraffic:
         self._start(seed)
         _active = self
         try:
+            self._flows = None
+            if config.demand.flows:  # their own generator: the trips draw what they drew without flows
+                self._flows = FlowStreams(self._lib, config.demand.flows, self.net.road_to_edge, rng.spawn(1)[0],
+                                          _TRAFFIC_TYPE, config.demand, capacity=config.n_slots - config.n_vehicles)
             self._trips = TripPool(self._lib, sorted(self.net.edge_to_road), rng, _TRAFFIC_TYPE, config.demand)
             self._trips.add(config.n_vehicles, initial=True)
             if config.n_vehicles and not self._trips.count:
@@ -213,6 +217,10 @@ class SumoTraffic:
         """Step SUMO once: the next state becomes the previous one, the new one is read into the slots."""
         lib, slots, period = self._lib, self._slots, self.config.period
         slots.begin_step()
+        if self._flows is not None:
+            t = lib.simulation.getTime()
+            for k in self._flows.depart(t, t + 1.0 / self.config.rate_hz):
+                self._events.append({"type": "traffic_flow_refused", "flow": k, "tick": self._t_next + period})
         lib.simulation.step()
         self._t_prev, self._t_next = self._t_next, self._t_next + period
         arrived = 0
@@ -224,6 +232,8 @@ class SumoTraffic:
                                      "vehicle": vid})
             if self._trips.owns(vid):
                 arrived += 1
+            elif self._flows is not None and self._flows.owns(vid):
+                self._flows.arrived(vid)
         for vid in lib.simulation.getDepartedIDList():
             if vid.startswith(_PHYSICS_PREFIX):
                 continue

@@ -115,3 +115,52 @@ def test_steps_are_checked():
         m.add(2.0, [0], [A], [1, 2], [A])
     with pytest.raises(ValueError, match="truth_xy"):
         m.add(2.0, [0], [[0.0, 0.0, 0.0]], [1], [A])
+
+
+def _motmetrics_of_everything(steps, radius):
+    """The scores motmetrics gives when fed every vehicle and track at every step (the full distance matrices)."""
+    import motmetrics as mm
+    from scipy.spatial.distance import cdist
+
+    acc = mm.MOTAccumulator(auto_id=False)
+    for k, (gt_ids, gt_xy, hyp_ids, hyp_xy) in enumerate(steps):
+        d = cdist(gt_xy, hyp_xy) if len(gt_ids) and len(hyp_ids) else np.zeros((len(gt_ids), len(hyp_ids)))
+        d[d >= radius] = np.nan
+        acc.update(list(gt_ids), list(hyp_ids), d, frameid=k)
+    return mm.metrics.create().compute(acc, return_dataframe=False, metrics=[
+        "mota", "motp", "idf1", "num_switches", "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses",
+        "num_objects", "num_detections"])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_feeding_motmetrics_only_the_matchable_gives_its_scores_of_everything(seed):
+    """Random crowds (60 cars in 1 km², some leaving and coming back, 25 tracks: noisy followers that jump to
+    neighbours, lose their car or are false): every score equals motmetrics' on the full feed (MOTP to rounding: its
+    sum runs over the same pairs)."""
+    rng = np.random.default_rng(seed)
+    n_cars, n_tracks, radius = 60, 25, 20.0
+    xy = rng.uniform(0.0, 1000.0, (n_cars, 2))
+    v = rng.normal(0.0, 8.0, (n_cars, 2))
+    follow = rng.integers(0, n_cars, n_tracks)
+    steps = []
+    for _ in range(40):
+        xy += v
+        here = rng.random(n_cars) > 0.1
+        jump = rng.random(n_tracks) < 0.05
+        follow[jump] = rng.integers(0, n_cars, jump.sum())
+        track_xy = xy[follow] + rng.normal(0.0, 6.0, (n_tracks, 2))
+        false = rng.random(n_tracks) < 0.15
+        track_xy[false] = rng.uniform(0.0, 1000.0, (false.sum(), 2))
+        live = rng.random(n_tracks) > 0.1
+        gt_ids = np.flatnonzero(here)
+        steps.append((gt_ids, xy[gt_ids].copy(), np.flatnonzero(live) + 1000, track_xy[live]))
+    ref = _motmetrics_of_everything(steps, radius)
+    assert ref["num_switches"] > 0 and ref["mostly_tracked"] > 0 and ref["mostly_lost"] > 0
+    m = _run(steps, radius)
+    s = m.summary()
+    assert m._unfed_truth > 0 and m._unfed_tracks > 0  # the scores rest on the completed counts
+    assert (s.num_switches, s.mostly_tracked, s.mostly_lost, s.false_positives, s.misses, s.truth_instances,
+            s.matches) == (ref["num_switches"], ref["mostly_tracked"], ref["mostly_lost"], ref["num_false_positives"],
+                           ref["num_misses"], ref["num_objects"], ref["num_detections"])
+    assert s.mota == ref["mota"] and s.idf1 == ref["idf1"]
+    assert s.motp_m == pytest.approx(ref["motp"], rel=1e-12)

@@ -20,10 +20,11 @@
   radius): ``identity_fraction`` (steps on the designated target), ``id_switches``, ``time_to_acquire_s``,
   ``losses``, ``time_to_reacquire_mean_s`` / ``_max_s`` and ``unrecovered_losses``;
 - ``uavs.<id>.mot`` (UAVs whose estimator holds several tracks, :class:`autonomy.diagnostics.HoldsTracks`): the
-  UAV's confirmed tracks at its agent steps against every ground vehicle (:mod:`autonomy.metrics.mot`): ``mota``,
+  UAV's confirmed tracks at its agent steps against every ground vehicle on the road (a traffic source's free slots,
+  parked out of sight, are no vehicles here nor in the identity metrics) (:mod:`autonomy.metrics.mot`): ``mota``,
   ``motp_m``, ``idf1``, ``num_switches``, ``mostly_tracked``, ``mostly_lost``, ``false_positives``, ``misses``,
   ``truth_instances``, ``matches``, ``gospa_mean_m``, with the ``steps`` scored and the ``match_radius_m``. A partial
-  record may hold these from fewer steps than its other metrics (they are rescored as the steps grow by a quarter);
+  record may hold these from fewer steps than its other metrics (they are rescored as the steps grow fourfold);
   and ``uavs.<id>.target_track_changes``, how often the track the estimator takes for the target changed (each a
   ``target_track_changed`` event in ``events.jsonl``: which track to which, whether the old one still lives);
 - ``base_station`` (UAVs fusing at a base station, paper 001): base steps, packets sent / delivered / lost / late /
@@ -145,7 +146,13 @@ class MetricsTracker:
         if tick % self._every:  # no agent due and no record tick (most ticks)
             return
         due = [a.uav for a in asm.agents if tick % a.divisor == 0]
-        all_xy = asm.cars.state.p_W[:, :2].copy() if due and asm.cars is not None else None
+        all_xy = None
+        if due and asm.cars is not None:
+            st = asm.cars.state
+            all_xy = st.p_W[:, :2].copy()
+            active = getattr(st, "active", None)
+            if active is not None:  # a traffic source's free slots (parked bodies) are no vehicles
+                all_xy[~np.asarray(active, dtype=bool)] = np.inf
         if all_xy is not None and self.mot:
             self._observe_tracks(tick, asm, due, all_xy)
         if due and asm.target_index is not None and asm.cars is not None:
@@ -187,13 +194,14 @@ class MetricsTracker:
     def _observe_tracks(self, tick: int, asm: Assembly, due: list[int], all_xy: np.ndarray) -> None:
         """The confirmed tracks of each due multi-target estimator against every ground vehicle."""
         slots = _slots_by_uav(asm)
-        truth_ids = np.arange(len(all_xy))
+        truth_ids = np.flatnonzero(np.isfinite(all_xy[:, 0]))  # the vehicles on the road (free slots are inf)
+        truth_xy = all_xy[truth_ids]
         for i in due:
             if i not in self.mot:
                 continue
             reports = [r for r in slots[i].agent.estimator.track_reports() if r.confirmed]
             xy = np.array([r.estimate.p_W[:2] for r in reports]).reshape(-1, 2)
-            self.mot[i].add(tick / self.physics_hz, truth_ids, all_xy, [r.track_id for r in reports], xy)
+            self.mot[i].add(tick / self.physics_hz, truth_ids, truth_xy, [r.track_id for r in reports], xy)
 
     def _mot_block(self, i: int, complete: bool) -> dict[str, Any] | None:
         """UAV ``i``'s MOT scores; a partial call reuses the last ones until the steps grew by ``_MOT_RESCORE``."""

@@ -150,3 +150,14 @@ def test_flows_and_trips_are_checked_against_the_engine_slots_and_roads():
     with pytest.raises(WorldError) as info:
         run("road_standoff", duration=1.0, overrides=[*SUMO, "traffic.flows=[{from: h0_0.f, to: nope, per_hour: 60}]"])
     assert "traffic.flows[0].to" in str(info.value) and "'nope'" in str(info.value)
+
+
+def test_free_sumo_slots_are_not_scored_as_vehicles(tmp_path):
+    """40 SUMO slots of which 10 carry trips: the 30 free ones are parked bodies, not vehicles. The MOT scores count
+    at most the target and the 10 trips at each of the UAV's scored steps (with the free slots: 41 each)."""
+    res = run("road_standoff_traffic", duration=10.0, seed=1, out_dir=tmp_path / "p",
+              overrides=["ground_vehicles=[{id: car1, type: sedan, colour: red, role: target, "
+                         "route: {random_walk_from: h2_0.f}}]", *SUMO, "traffic.trips=10"])
+    assert res.status == "completed"
+    mot = res.metrics["uavs"]["uav1"]["mot"]
+    assert mot["steps"] > 5 and 0.6 * 11 * mot["steps"] <= mot["truth_instances"] <= 11 * mot["steps"]

@@ -131,14 +131,15 @@ def _draw_map(ax: Any, rec: RunRecord, d: dict[str, np.ndarray], target: int | N
         vt = rec.streams["vehicle_truth"]
         veh = vt["vehicle"].astype(int)
         is_target = veh == (-1 if target is None else target)
-        traffic = _segments(veh, vt["t"], vt["x"], vt["y"], ~is_target)
+        on = np.asarray(vt["active"], dtype=bool) if "active" in vt else np.ones(len(veh), dtype=bool)
+        traffic = _segments(veh, vt["t"], vt["x"], vt["y"], ~is_target & on)  # free traffic slots hold no car
         ax.add_collection(LineCollection(traffic, colors=_TRAFFIC_TRUTH, linewidths=0.8, zorder=2,
                                          label="other vehicles (truth)"))
         if is_target.any():
             ax.plot(vt["x"][is_target], vt["y"][is_target], color=_TARGET_TRUTH, lw=1.4, zorder=5,
                     label="target (truth)")
-        xs.append(vt["x"])
-        ys.append(vt["y"])
+        xs.append(vt["x"][on])
+        ys.append(vt["y"][on])
     track = d["track"].astype(np.int64)
     ax.add_collection(LineCollection(_segments(track, d["t"], d["x"], d["y"]), colors=[_TRACK_RGB],
                                      linewidths=0.6, alpha=0.7, zorder=3, label="tracks"))

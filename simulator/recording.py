@@ -101,7 +101,8 @@ class Recording:
                 "vx": st.v_W[:, 0], "vy": st.v_W[:, 1], "vz": st.v_W[:, 2],
                 "ax": st.a_W[:, 0], "ay": st.a_W[:, 1], "az": st.a_W[:, 2], "speed": np.asarray(st.speed),
                 "road": np.asarray(list(st.road_id), dtype=str), "s": np.asarray(st.s),
-                "lateral": np.asarray(st.lateral)})
+                "lateral": np.asarray(st.lateral),
+                "active": np.ones(n, dtype=bool) if getattr(st, "active", None) is None else np.asarray(st.active)})
 
     def detections(self, tick: int, uav: int, sensor: str, out: SensorOutput) -> None:
         """One ``detections`` row per detection of a scan of UAV ``uav``'s sensor ``sensor``."""

@@ -53,10 +53,11 @@ _ESTIMATE = ("tick", "t", "uav", "valid", "x", "y", "vx", "vy", "pxx", "pxy", "p
 _SCHEMAS = (
     StreamSchema(name="uav_truth", doc="per UAV per record tick: position (m), attitude quaternion, velocity (m/s)",
                  columns=("tick", "t", "uav", "x", "y", "z", "qx", "qy", "qz", "qw", "vx", "vy", "vz")),
-    StreamSchema(name="vehicle_truth", doc="per ground vehicle per record tick: pose, velocity, acceleration, speed "
-                 "and road coordinates (road id, arc length s and lateral offset, m)",
+    StreamSchema(name="vehicle_truth", doc="per ground vehicle per record tick: pose, velocity, acceleration, speed, "
+                 "road coordinates (road id, arc length s and lateral offset, m) and whether it is on the road (false "
+                 "for a traffic source's free slot, which holds no vehicle: its other columns are stale)",
                  columns=("tick", "t", "vehicle", "x", "y", "z", "yaw", "vx", "vy", "vz", "ax", "ay", "az", "speed",
-                          "road", "s", "lateral")),
+                          "road", "s", "lateral", "active")),
     StreamSchema(name="detections", doc="per detection: when taken and delivered (s), the UAV and sensor, its kind, "
                  "the truth behind it (-1 false alarm) and its first four measurement components (NaN-padded)",
                  columns=("tick", "t_meas", "t_arrival", "uav", "sensor", "kind", "truth_id", "z0", "z1", "z2", "z3")),

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from simulator.plots_tracks import target_track_series
+from simulator.render.timeline import hidden_when_free
 from simulator.runrecord import RunRecord, load_run
 
 __all__ = ["BoxShape", "Body", "DetectionScan", "Ellipse", "LinkSample", "RunScene", "Series", "TrackStep",
@@ -174,7 +175,7 @@ def _bodies(rec: RunRecord, world: object) -> list[Body]:
         yaw = np.unwrap(d["yaw"])
         q = np.c_[np.zeros((len(yaw), 2)), np.sin(yaw / 2), np.cos(yaw / 2)]
         size = np.asarray(world.vehicle_size(v), dtype=float)
-        p = np.c_[d["x"], d["y"], d["z"]]
+        p = hidden_when_free(d)  # a traffic source's free slots below the ground
         out.append(Body(gv[v].id if v < len(gv) else f"vehicle{v}", "vehicle", world.vehicle_role(v) or "",
                         d["t"], p, q, size))
     return out

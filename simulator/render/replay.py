@@ -23,7 +23,7 @@ from simulator.render.overlays import (LEGEND, SEARCH_LEGEND, TRACKS_LEGEND, Est
                                        TrackMark, draw_hud, draw_overlays)
 from simulator.render.projection import CameraView
 from simulator.render.stage import UAV_COLORS, Stage, load_geometry
-from simulator.render.timeline import Timeline
+from simulator.render.timeline import HIDDEN_Z, Timeline
 from simulator.render.world_marks import RadioLinks, radar_regards
 from simulator.render.world_view import ReplayWorld, read_world
 from simulator.runrecord import load_run, load_search_sets
@@ -214,6 +214,8 @@ class Replayer:
                 marks.append(EstimateMark(u, UAV_COLORS[u % len(UAV_COLORS)], got[0], got[1], self.standoff.get(u)))
         trails = [(UAV_COLORS[u % len(UAV_COLORS)], tl.uavs[u].trail(t, cfg.trail_s)) for u in self.uav_index]
         traffic_W = np.array([tl.vehicles[v].at(t)[0] for v in self._traffic]) if self._traffic else None
+        if traffic_W is not None:  # no brackets on free slots (kept below the ground)
+            traffic_W = traffic_W[traffic_W[:, 2] > 0.5 * HIDDEN_Z]
         return OverlayFrame(target_W=p_t if self.target is not None else None, estimates=marks, trails=trails,
                             scans=tl.radar_scans(t),
                             scan_rgb={u: UAV_COLORS[u % len(UAV_COLORS)] for u in self.uav_index},

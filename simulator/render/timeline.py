@@ -64,6 +64,19 @@ class PoseTrack:
         return np.vstack([self.p_W[keep], self.at(t)[0][None]])
 
 
+HIDDEN_Z = -100.0
+"""Height (m) at which a replay keeps a traffic source's free slot (no vehicle): below the ground, out of sight."""
+
+
+def hidden_when_free(d: dict[str, np.ndarray]) -> np.ndarray:
+    """Positions (N, 3) of one vehicle's ``vehicle_truth`` rows, at :data:`HIDDEN_Z` where the slot held no vehicle
+    (``active`` false; records without the column: always on the road)."""
+    p = np.c_[d["x"], d["y"], d["z"]].astype(float)
+    if "active" in d:
+        p[~np.asarray(d["active"], dtype=bool), 2] = HIDDEN_Z
+    return p
+
+
 @dataclass(frozen=True)
 class EstimateTrack:
     """One UAV's target estimates: times (N,) s, positions (N, 2) m, covariances (N, 2, 2) m², validity (N,)."""
@@ -173,7 +186,7 @@ class Timeline:
         for v, d in (_group(cars, "vehicle").items() if len(cars.get("t", ())) else ()):
             yaw = np.unwrap(d["yaw"])
             q = np.c_[np.zeros((len(yaw), 2)), np.sin(yaw / 2), np.cos(yaw / 2)]
-            self.vehicles[v] = PoseTrack(d["t"], np.c_[d["x"], d["y"], d["z"]], q)
+            self.vehicles[v] = PoseTrack(d["t"], hidden_when_free(d), q)
         self.estimates: dict[int, EstimateTrack] = {}
         if "estimates" in streams and len(streams["estimates"].get("t", ())):
             for u, d in _group(streams["estimates"], "uav").items():

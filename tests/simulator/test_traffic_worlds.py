@@ -154,10 +154,25 @@ def test_flows_and_trips_are_checked_against_the_engine_slots_and_roads():
 
 def test_free_sumo_slots_are_not_scored_as_vehicles(tmp_path):
     """40 SUMO slots of which 10 carry trips: the 30 free ones are parked bodies, not vehicles. The MOT scores count
-    at most the target and the 10 trips at each of the UAV's scored steps (with the free slots: 41 each)."""
+    at most the target and the 10 trips at each of the UAV's scored steps (with the free slots: 41 each); the record
+    marks the free slots and a replay keeps them out of sight."""
     res = run("road_standoff_traffic", duration=10.0, seed=1, out_dir=tmp_path / "p",
               overrides=["ground_vehicles=[{id: car1, type: sedan, colour: red, role: target, "
                          "route: {random_walk_from: h2_0.f}}]", *SUMO, "traffic.trips=10"])
     assert res.status == "completed"
     mot = res.metrics["uavs"]["uav1"]["mot"]
     assert mot["steps"] > 5 and 0.6 * 11 * mot["steps"] <= mot["truth_instances"] <= 11 * mot["steps"]
+    # the record says which slots hold a vehicle, and a replay keeps the free ones below the ground
+    from simulator.render.timeline import HIDDEN_Z, Timeline
+
+    vt = _truth(res)
+    active = vt["active"].astype(bool)
+    per_tick = np.bincount(np.unique(vt["tick"], return_inverse=True)[1], weights=active)
+    assert per_tick.max() <= 11 and per_tick.min() >= 1 and (~active).sum() >= 29 * len(per_tick)
+    assert active[vt["vehicle"] == 0].all()  # the target
+    tl = Timeline(res.record.streams)
+    t = float(vt["t"].max())
+    free = sorted(set(vt["vehicle"][~active & (vt["t"] == t)].tolist()))
+    on = sorted(set(vt["vehicle"][active & (vt["t"] == t)].tolist()))
+    assert all(tl.vehicles[v].at(t)[0][2] == HIDDEN_Z for v in free)
+    assert all(tl.vehicles[v].at(t)[0][2] > -1.0 for v in on)

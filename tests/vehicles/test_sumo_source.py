@@ -133,6 +133,13 @@ def test_poses_interpolate_between_sumo_steps(client, work_dir) -> None:
         dyaw = np.angle(np.exp(1j * (b.yaw - a.yaw)))
         assert np.allclose(np.angle(np.exp(1j * (m.yaw - a.yaw)))[both], 0.5 * dyaw[both], atol=1e-12)
         assert np.allclose(m.v_xy[both], m.speed[both, None] * np.c_[np.cos(m.yaw), np.sin(m.yaw)][both])
+        # the acceleration is the derivative of those velocities: the central difference over two physics ticks
+        lo, hi = tr.poses(t0 + PERIOD // 2 - 1), tr.poses(t0 + PERIOD // 2 + 1)
+        central = (hi.v_xy - lo.v_xy) * PHYSICS_HZ / 2.0
+        assert np.allclose(m.a_xy[both], central[both], rtol=0, atol=1e-3)
+        along = np.sum(m.a_xy * np.c_[np.cos(m.yaw), np.sin(m.yaw)], axis=1)
+        assert np.allclose(along[both], ((b.speed - a.speed) * RATE_HZ)[both], rtol=0, atol=1e-9)
+        assert np.any(np.abs(along[both]) > 0.1) and np.all(m.a_xy[~m.active] == 0.0)
         with pytest.raises(ValueError, match=rf"poses\({t0 + 2 * PERIOD}\): SUMO's states cover ticks "
                                              rf"{t0}..{t0 + PERIOD}; advance\(\) it first"):
             tr.poses(t0 + 2 * PERIOD)

@@ -247,7 +247,9 @@ class CarFleet:
                 p_W[idx, 0], p_W[idx, 1], p_W[idx, 2] = ps.xy[:, 0], ps.xy[:, 1], src.ground_z
                 q_WB[idx, 2], q_WB[idx, 3] = np.sin(0.5 * ps.yaw), np.cos(0.5 * ps.yaw)
                 v_W[idx, :2], omega[idx], yaw[idx], speed[idx] = ps.v_xy, ps.yaw_rate, ps.yaw, ps.speed
-                active[idx] = ps.active  # a_W stays 0: the source's velocities are piecewise constant per step
+                active[idx] = ps.active
+                if ps.a_xy is not None:  # the derivative of v_xy as the source moves it (SUMO: over its step)
+                    a_W[idx, 0], a_W[idx, 1] = ps.a_xy[:, 0], ps.a_xy[:, 1]
             self._arr = _Arrays(p_W=p_W, q_WB=q_WB, v_W=v_W, omega_z=omega, a_W=a_W, yaw=yaw, speed=speed,
                                 active=active)
         return self._arr

@@ -44,6 +44,9 @@ class TrafficPoses:
         (N,) yaw rates (rad/s).
     active : np.ndarray
         (N,) bool: the slot holds a vehicle on the road now (always True for the built-in fleet).
+    a_xy : np.ndarray or None
+        (N, 2) accelerations (m/s²): the time derivative of ``v_xy`` as the source moves it (None: not given; the
+        built-in fleet's come from its per-tick readings).
     """
 
     tick: int
@@ -53,6 +56,7 @@ class TrafficPoses:
     v_xy: np.ndarray
     yaw_rate: np.ndarray
     active: np.ndarray
+    a_xy: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -117,9 +117,15 @@ class SlotStates:
             yaw_rate = np.where(same, dyaw, 0.0) / step_dt
         yaw = np.arctan2(np.sin(yaw), np.cos(yaw))
         speed = np.where(on, speed, 0.0)
-        v_xy = speed[:, None] * np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-        return TrafficPoses(tick=tick, xy=xy, yaw=yaw, speed=speed, v_xy=v_xy, yaw_rate=np.where(on, yaw_rate, 0.0),
-                            active=on)
+        yaw_rate = np.where(on, yaw_rate, 0.0)
+        c, s = np.cos(yaw), np.sin(yaw)
+        v_xy = speed[:, None] * np.stack([c, s], axis=1)
+        # d/dt of speed (cos yaw, sin yaw) with speed and yaw linear over the step: along the heading the step's
+        # change of speed, across it speed times the yaw rate (at a step's end, the step just ended)
+        accel = np.where(on & same, (self.speed[1, sel] - self.speed[0, sel]) / step_dt, 0.0)
+        a_xy = np.stack([accel * c - speed * yaw_rate * s, accel * s + speed * yaw_rate * c], axis=1)
+        return TrafficPoses(tick=tick, xy=xy, yaw=yaw, speed=speed, v_xy=v_xy, yaw_rate=yaw_rate, active=on,
+                            a_xy=a_xy)
 
     def active_at(self, alpha: float) -> np.ndarray:
         """Which slots hold a vehicle on the road at ``alpha`` (the ``active`` of :meth:`poses`), without poses."""

@@ -94,9 +94,8 @@ def build_car_fleet(world: World, network: Any, client: int, physics_hz: int, rn
 def _sumo(world: World, network: Any, client: int, physics_hz: int, rng: Any, signals: tuple[str, ...]) -> Any:
     """SUMO co-simulation of the world's traffic section, its network cached under the skytrack cache."""
     from vehicles.sumo import make_sumo_traffic
-    from worlds.map_cache import cache_root
-
     from vehicles.sumo.demand import DemandConfig, Flow
+    from worlds.map_cache import cache_root
 
     spec = world.traffic
     flows = tuple(Flow(origin=f.origin, destination=f.destination, per_hour=f.per_hour, begin_s=f.begin_s,

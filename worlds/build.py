@@ -110,6 +110,11 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
                     sample = ", ".join(list(network.roads)[:6])
                     issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; "
                                                        f"a street 's' gives roads 's.f' and 's.r')"))
+        for i, nid in enumerate(world.traffic.signals):
+            if nid not in network.nodes:
+                sample = ", ".join(list(network.nodes)[:6])
+                issues.append(WorldIssue(f"traffic.signals[{i}]", nid, f"a junction node id of the network (e.g. "
+                                                                       f"{sample})"))
         for i, f in enumerate(world.traffic.flows):
             for key, rid in (("from", f.origin), ("to", f.destination)):
                 if rid not in network.roads:

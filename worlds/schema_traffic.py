@@ -110,16 +110,18 @@ class TrafficSpec(Strict):
                                                "compiled fleet of skytrack's own driver; 'sumo' = SUMO in process "
                                                "(pip install 'skytrack[traffic]')")
     tls: Literal["auto", "map", "guess", "none"] = Field(
-        "auto", description="sumo only: traffic lights at the junctions the map's signals control ('map'; OSM "
-                            "highway=traffic_signals and signalised crossings), those plus netconvert's guess "
-                            "elsewhere ('guess'), none at all (priority junctions: 'none'), or 'map' when the map "
-                            "marks signals and 'guess' when it does not ('auto')")
+        "auto", description="sumo only: traffic lights at the junctions the map's signals control (OSM "
+                            "highway=traffic_signals and signalised crossings) and those listed in signals ('map'), "
+                            "those plus netconvert's guess elsewhere ('guess'), none at all (priority junctions: "
+                            "'none'), or 'map' when there are any and 'guess' when there are none ('auto')")
     cars: int = Field(0, ge=0, le=5000, description="number of traffic cars to generate, 0 to 5000 (sumo: the scene "
                                                     "slots, the most vehicles on the road at once)")
     trips: int | None = Field(None, ge=0, le=5000, description="sumo only: random trips kept on the road, at most "
                                                                "cars; default cars without flows, 0 with them")
     flows: list[FlowSpec] = Field(default_factory=list, description="sumo only: vehicle flows between roads, on the "
                                                                     "slots the trips leave")
+    signals: list[str] = Field(default_factory=list, description="sumo only: junction node ids that get traffic "
+                                                                 "lights besides those the map's signals control")
     rate_hz: int = Field(20, gt=0, description="the traffic drivers' update rate, Hz; must divide sim.physics_hz")
     types: list[str] = Field(default_factory=lambda: ["sedan", "van"], min_length=1,
                              description="car types, cycled over the generated cars (sumo: the first, for all)")
@@ -144,9 +146,9 @@ class TrafficSpec(Strict):
 
     @model_validator(mode="after")
     def _demand(self) -> TrafficSpec:
-        if self.engine != "sumo" and (self.flows or self.trips is not None):
-            raise ValueError("trips and flows need engine: sumo (the built-in cars drive random walks from their "
-                             "starts)")
+        if self.engine != "sumo" and (self.flows or self.trips is not None or self.signals):
+            raise ValueError("trips, flows and signals need engine: sumo (the built-in cars drive random walks from "
+                             "their starts and know no traffic lights)")
         if self.trips is not None and self.trips > self.cars:
             raise ValueError(f"trips <= cars ({self.cars}, the scene slots), got trips {self.trips}")
         if self.flows and self.cars - self.sumo_trips < 1:

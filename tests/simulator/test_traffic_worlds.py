@@ -176,3 +176,37 @@ def test_free_sumo_slots_are_not_scored_as_vehicles(tmp_path):
     on = sorted(set(vt["vehicle"][active & (vt["t"] == t)].tolist()))
     assert all(tl.vehicles[v].at(t)[0][2] == HIDDEN_Z for v in free)
     assert all(tl.vehicles[v].at(t)[0][2] > -1.0 for v in on)
+
+
+def test_the_target_car_stops_at_sumos_red_lights_and_goes_at_green(tmp_path):
+    """Lights at every junction of road_standoff's town (traffic.signals, SUMO traffic): within 60 s the physics
+    target meets a red light and stops before the junction (a car_stop event marked light; its speed under 0.3 m/s
+    while it waits, until the car_go when its link no longer shows red or yellow)."""
+    from worlds.build import build_geometry
+    from worlds.roads.signals import junctions
+
+    loaded = load_world("road_standoff")
+    nodes = sorted(junctions(build_geometry(loaded.world, loaded.path, np.random.default_rng(0)).network))
+    res = run("road_standoff", duration=60.0, seed=2, out_dir=tmp_path / "l",
+              overrides=[*SUMO, "traffic.tls=map", f"traffic.signals=[{', '.join(nodes)}]"])
+    assert res.status == "completed"
+    stops = [e for e in res.record.events if e["type"] == "car_stop" and e.get("car") == 0 and e.get("light")]
+    assert stops  # (besides its planned dwell stops)
+    first = stops[0]["tick"] / 240.0
+    goes = [e["tick"] / 240.0 for e in res.record.events
+            if e["type"] == "car_go" and e.get("car") == 0 and e["tick"] / 240.0 > first]
+    until = goes[0] if goes else 60.0
+    vt = _truth(res)
+    target = vt["vehicle"] == 0
+    assert until > first + 1.0
+    waiting = target & (vt["t"] > first + 0.5) & (vt["t"] < until - 0.1)
+    assert waiting.sum() > 5 and np.all(vt["speed"][waiting] < 0.3)
+
+
+def test_signals_are_checked_against_the_engine_and_the_network():
+    with pytest.raises(WorldError) as info:
+        load_world("road_standoff", ["traffic.cars=4", "traffic.signals=[a]"])
+    assert "need engine: sumo" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        run("road_standoff", duration=1.0, overrides=[*SUMO, "traffic.signals=[nowhere]"])
+    assert "traffic.signals[0]" in str(info.value) and "'nowhere'" in str(info.value)

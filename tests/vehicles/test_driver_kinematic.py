@@ -241,3 +241,65 @@ def test_cruise_speed_changes_form_a_poisson_process_within_the_range():
     mean = seconds / period  # Poisson count; 4-sigma band
     assert abs(changes - mean) < 4 * math.sqrt(mean)
     assert 0.6 <= min(fractions) and max(fractions) <= 0.9
+
+
+def _drive_with_light(light, seconds=40.0, physics_hz=240):
+    """One car from 0_0 east along h0_0.f, h1_0.f, h2_0.f of a 4 x 1 grid (junctions at x = 120, 240 m), no planned
+    stops, the light of junction 1_0 (h0_0.f -> h1_0.f) given by ``light(t)``: (times, x, speed, stopped, events)."""
+    from vehicles.car.bicycle import KinematicBicycle
+    from vehicles.car.driver import Driver
+
+    net = grid_network(n=4, spacing=120.0)
+    route = Route(roads=("h0_0.f", "h1_0.f", "h2_0.f"), stops=())
+    cfg = DriverConfig()
+    d = Driver(config=cfg, params=SEDAN, route=route, network=net, rng=np.random.default_rng(3),
+               physics_hz=physics_hz)
+    tick = [0]
+    if light is not None:
+        d.signal = lambda a, b: light(tick[0] / physics_hz) if (a, b) == ("h0_0.f", "h1_0.f") else ""
+    p, yaw = d.spawn_pose()
+    car = KinematicBicycle(SEDAN, p, yaw, 0.0)
+    every = cfg.ticks_per_update(physics_hz)
+    t, x, v, stopped, events = [], [], [], [], []
+    for k in range(int(seconds * physics_hz)):
+        tick[0] = k
+        car.step(d.command, 1.0 / physics_hz)
+        if k % every == 0:
+            d.update(car.p_xy, car.yaw, car.speed, k, None, car.yaw_rate)
+            events += d.pop_events()
+        t.append(k / physics_hz)
+        x.append(car.p_xy[0])
+        v.append(car.speed)
+        stopped.append(d.stopped)
+    return np.array(t), np.array(x), np.array(v), np.array(stopped), events
+
+
+def test_a_red_light_stops_the_car_at_the_stop_line_until_green():
+    """Red until 25 s: the car stops before the junction at x = 120 m (its stop line within the stop window), stays
+    while red and goes at green; without a light, or with green throughout, it drives through without stopping."""
+    t, x, v, stopped, events = _drive_with_light(lambda s: "r" if s < 25.0 else "G")
+    at = (t > 18.0) & (t < 25.0)
+    assert np.all(stopped[at]) and np.all(v[at] < 0.3)
+    assert 100.0 < x[at].min() and x[at].max() < 120.0  # before the junction, within 20 m of it
+    assert not stopped[(t > 26.0) & (x < 300.0)].any() and x[-1] > 180.0  # gone at green, through the junction
+    stops = [e for e in events if e["type"] == "car_stop"]
+    assert len(stops) == 1 and stops[0]["light"] and stops[0]["node"] == "1_0"
+    go = [e for e in events if e["type"] == "car_go"]
+    assert len(go) == 1 and 25.0 <= go[0]["tick"] / 240 < 25.1
+    for light in (None, lambda s: "G"):
+        t2, x2, v2, stopped2, events2 = _drive_with_light(light)
+        assert not stopped2[x2 < 300.0].any() and not [e for e in events2 if e["type"] == "car_stop"]  # (route end)
+        assert np.all(v2[(t2 > 8.0) & (x2 < 200.0)] > 5.0)  # through the junction at speed
+
+
+def test_yellow_stops_only_a_car_that_can_stop_comfortably():
+    """Yellow from the moment the car is 60 m (can stop) or 8 m (cannot, at cruise speed) before the junction."""
+    def reach(limit):
+        t, x, *_ = _drive_with_light(None, seconds=30.0)
+        return t[np.argmax(x > 120.0 - limit)]
+    for before, stops in ((60.0, True), (8.0, False)):
+        t_yellow = reach(before)
+        t, x, v, stopped, events = _drive_with_light(lambda s, ty=t_yellow: "y" if s >= ty else "G", seconds=30.0)
+        assert bool(stopped.any()) == stops, before
+        if stops:
+            assert x[stopped].max() < 120.0

@@ -369,3 +369,36 @@ def test_a_flow_on_an_unknown_road_is_refused_and_sumo_closed(client, work_dir) 
         Flow(origin="a", destination="b", per_hour=0.0)
     with pytest.raises(ValueError, match="0 <= begin_s < end_s required"):
         Flow(origin="a", destination="b", per_hour=1.0, begin_s=5.0, end_s=5.0)
+
+
+@needs_sumo
+def test_signal_reads_the_lights_of_a_link_as_sumo_shows_them(client, work_dir) -> None:
+    """A light at junction 1_1 of the grid: every link through it reads as SUMO's state string says (red, yellow or
+    green: the most restrictive of the link's lanes), each goes through red and green within two minutes, links
+    elsewhere read "" (no light)."""
+    from vehicles.sumo.network import NetConfig
+
+    net = _grid()
+    with make_sumo_traffic(net, n_vehicles=20, n_slots=24, rate_hz=RATE_HZ, physics_hz=PHYSICS_HZ, client_id=client,
+                           rng=np.random.default_rng(7), work_dir=work_dir,
+                           net=NetConfig(tls="none", signals=("1_1",))) as tr:
+        lib = tr._lib
+        assert lib.trafficlight.getIDList() == ("1_1",)
+        into = [r for r in net.roads.values() if r.end_node == "1_1"]
+        links = [(a.id, b.id) for a in into for b in net.roads.values()
+                 if b.start_node == "1_1" and b.end_node != a.start_node]
+        assert len(links) == 12
+        seen = {link: set() for link in links}
+        for k in range(1, 1200):  # 120 s of SUMO steps
+            tr.advance(k * PERIOD, OtherCars.none())
+            state = lib.trafficlight.getRedYellowGreenState("1_1")
+            for a, b in links:
+                got = tr.signal(a, b)
+                chars = {state[i] for i, group in enumerate(lib.trafficlight.getControlledLinks("1_1"))
+                         for lane_in, lane_out, _ in group
+                         if lib.lane.getEdgeID(lane_in) == a and lib.lane.getEdgeID(lane_out) == b}
+                want = "r" if chars & set("rRu") else "y" if chars & set("yY") else "G"
+                assert got == want
+                seen[(a, b)].add(got)
+        assert all({"r", "G"} <= s for s in seen.values())
+        assert tr.signal("h0_0.f", "h1_0.f") == ""  # junction 1_0 has no light

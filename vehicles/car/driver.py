@@ -1,5 +1,16 @@
 """Road-following driver: Stanley lateral control on the lane centre-line, a curvature-aware speed envelope,
-IDM+ car following, junction stops with seeded dwell times and random cruise-speed changes. Pure numpy.
+IDM+ car following, junction stops with seeded dwell times, traffic lights where a signal source says, and random
+cruise-speed changes. Pure numpy.
+
+Traffic lights. A driver given a :attr:`Driver.signal` (the traffic source's light states: SUMO's for a physics car
+among SUMO traffic) asks it, for each junction on its path ahead, for the state of the link from the road it enters
+the junction on to the road it leaves by: red (``r``, ``R``, red-yellow ``u``) is a stop at that junction's stop line
+unless the car could not stop before it even braking its hardest (distance to the line under
+``v² / (2 b_max) − w``, ``w`` the stop window, so a car braking to the line keeps stopping there); yellow (``y``,
+``Y``) is one where it can still stop at the planned deceleration (distance at least ``v² / (2 b_plan) − w``),
+otherwise the car goes on; anything else (green ``G`` / ``g``, off, no light) is no stop. A car
+stopped at a light goes when the link shows neither red nor yellow. Lights draw nothing from the driver's generator,
+so a driver without a signal source drives exactly as before.
 
 Lateral law (Stanley; Thrun et al., J. Field Robotics 23(9), 2006) at the front axle p_f = p + (L/2)(cos psi, sin psi):
     delta = wrap(psi_path(p_f) - psi) - atan(k e_f / (v + v_soft)) - c (omega - v kappa_path),
@@ -11,6 +22,7 @@ Longitudinal law: see :mod:`vehicles.car.longitudinal`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -63,6 +75,8 @@ class Driver:
         self.mode = "drive"  # "drive" | "stopped" | "done"
         self._release_tick = 0
         self._stop_road = ""
+        self.signal: Callable[[str, str], str] | None = None  # light state of a link (module docstring)
+        self._at_light: tuple[str, str] | None = None  # the link whose light holds the stopped car
         self._tick = 0
         self._last_road = route.first_road
         self._ticks_per_second = physics_hz
@@ -151,14 +165,33 @@ class Driver:
         return self.plan.road_ids[k], s, proj.lateral + float(self.path.lane_offset[proj.index])
 
     # ---------------------------------------------------------------- stops
-    def _next_stop(self, s_car: float) -> tuple[float, int] | None:
-        """(path arc length of the next stop line (m), planned road index or -1 for the route end)."""
+    def _next_stop(self, s_car: float, v: float = 0.0) -> tuple[float, int] | None:
+        """(path arc length of the next stop line (m), planned road index or -1 for the route end): a planned stop, a
+        red light ahead (module docstring) or the route's end."""
         for k, s_j in enumerate(self._junction_s):
-            if self.plan.stop_flags[k] and s_j > s_car - 3 * self.config.stop_window:
+            if s_j <= s_car - 3 * self.config.stop_window:
+                continue
+            if self.plan.stop_flags[k] or (self.signal is not None and self._light_stops(k, s_j - s_car, v)):
                 return s_j, k
         if self._ends_route:
             return max(self.path.length - 0.5 * self.params.length - 1.0, 0.0), -1
         return None
+
+    def _link(self, k: int) -> tuple[str, str] | None:
+        """(road in, road out) of the junction at the end of planned road ``k``, None past the plan."""
+        ids = self.plan.road_ids
+        return (ids[k], ids[k + 1]) if k + 1 < len(ids) else None
+
+    def _light_stops(self, k: int, distance: float, v: float) -> bool:
+        """Whether the light of junction ``k``, ``distance`` m ahead, stops a car at ``v`` m/s (module docstring)."""
+        link = self._link(k)
+        if link is None:
+            return False
+        state = self.signal(*link)
+        slack = self.config.stop_window  # a car braking to the line keeps stopping there (a planned stop's window)
+        if state in ("r", "R", "u"):
+            return distance >= v * v / (2.0 * self.decel_max) - slack
+        return state in ("y", "Y") and distance >= v * v / (2.0 * self.decel_plan) - slack
 
     # --------------------------------------------------------------- update
     def update(self, p_xy: np.ndarray, yaw: float, speed: float, tick: int, leader: LeaderInfo | None = None,
@@ -177,12 +210,17 @@ class Driver:
             self._last_road = road_now
         v = max(float(speed), 0.0)
         self._update_cruise(tick)
-        stop = self._next_stop(proj.s)
+        stop = self._next_stop(proj.s, v)
         if self.mode == "drive" and stop is not None and stop[0] - proj.s < cfg.stop_window and v < cfg.stopped_speed:
             road, _, _ = self.road_position()
             if stop[1] < 0:
                 self.mode = "done"
                 self._event("car_route_end", road=road)
+            elif not self.plan.stop_flags[stop[1]]:  # a light: wait until it no longer shows red or yellow
+                self.mode = "stopped"
+                self._at_light = self._link(stop[1])
+                self._event("car_stop", road=road, node=self.network.roads[self.plan.road_ids[stop[1]]].end_node,
+                            dwell=None, light=True)
             else:
                 self.mode = "stopped"
                 self._stop_road = self.plan.road_ids[stop[1]]
@@ -190,11 +228,16 @@ class Driver:
                 self._release_tick = tick + int(round(dwell * self._ticks_per_second))
                 self._event("car_stop", road=road, node=self.network.roads[self.plan.road_ids[stop[1]]].end_node,
                             dwell=dwell)
-        if self.mode == "stopped" and tick >= self._release_tick:
+        if self.mode == "stopped" and self._at_light is not None:
+            if self.signal is None or self.signal(*self._at_light) not in ("r", "R", "u", "y", "Y"):
+                self.mode, self._at_light = "drive", None
+                self._event("car_go", road=self.road_position()[0])
+                stop = self._next_stop(proj.s, v)
+        elif self.mode == "stopped" and tick >= self._release_tick:
             self.mode = "drive"
             self.plan.clear_stop(self.plan.road_ids.index(self._stop_road))
             self._event("car_go", road=self.road_position()[0])
-            stop = self._next_stop(proj.s)
+            stop = self._next_stop(proj.s, v)
         steer = self._steer(p_xy, yaw, v, yaw_rate)
         if self.mode != "drive":
             self.command = DriveCommand(accel=-self.decel_max, steer=steer, hold=True, tick=tick)

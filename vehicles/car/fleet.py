@@ -166,6 +166,9 @@ class CarFleet:
         for src in sources:
             self.sources.append((np.arange(start, start + len(src.ids)), src))
             start += len(src.ids)
+        lights = next((src.signal for src in sources if hasattr(src, "signal")), None)
+        for i in self._phys:  # physics cars stop at the source's traffic lights (kinematic ones step compiled)
+            self.drivers[i].signal = lights
         self._n = start
         body = np.zeros(start, dtype=int)
         for i, dyn in self.dynamics.items():

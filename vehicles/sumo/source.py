@@ -175,6 +175,9 @@ class SumoTraffic:
         self._start(seed)
         _active = self
         try:
+            self._links = self._light_links()
+            self._tls_state: dict[str, str] = {}
+            self._tls_at = None
             self._flows = None
             if config.demand.flows:  # their own generator: the trips draw what they drew without flows
                 self._flows = FlowStreams(self._lib, config.demand.flows, self.net.road_to_edge, rng.spawn(1)[0],
@@ -212,6 +215,40 @@ class SumoTraffic:
         except BaseException:
             self._lib.close()
             raise
+
+    def _light_links(self) -> dict[tuple[str, str], list[tuple[str, int]]]:
+        """(edge in, edge out) -> the (traffic light, link index) pairs of every lane-to-lane link between them."""
+        lib, out = self._lib, {}
+        for tls in lib.trafficlight.getIDList():
+            for k, group in enumerate(lib.trafficlight.getControlledLinks(tls)):
+                for lane_in, lane_out, _ in group:
+                    key = (lib.lane.getEdgeID(lane_in), lib.lane.getEdgeID(lane_out))
+                    if (tls, k) not in out.setdefault(key, []):
+                        out[key].append((tls, k))
+        return out
+
+    def signal(self, road_in: str, road_out: str) -> str:
+        """The light of the link from skytrack road ``road_in`` into ``road_out`` (:attr:`Driver.signal
+        <vehicles.car.driver.Driver.signal>`): ``"r"`` when any of its lanes' links shows red or red-yellow, else
+        ``"y"`` for yellow, ``"G"`` for green, ``""`` where no light controls it. The state is SUMO's after its latest
+        step, which runs one step (``1 / rate_hz``) ahead of the physics."""
+        to_edge = self.net.road_to_edge
+        links = self._links.get((to_edge.get(road_in), to_edge.get(road_out)))
+        if not links:
+            return ""
+        if self._tls_at != self._t_next:  # the states of SUMO's latest step, read once per light
+            self._tls_state, self._tls_at = {}, self._t_next
+        chars = ""
+        for tls, k in links:
+            state = self._tls_state.get(tls)
+            if state is None:
+                state = self._tls_state[tls] = self._lib.trafficlight.getRedYellowGreenState(tls)
+            chars += state[k]
+        if any(c in "rRu" for c in chars):
+            return "r"
+        if any(c in "yY" for c in chars):
+            return "y"
+        return "G" if any(c in "Gg" for c in chars) else ""
 
     def _step(self) -> None:
         """Step SUMO once: the next state becomes the previous one, the new one is read into the slots."""

@@ -111,3 +111,20 @@ def test_signalised_junctions_within_20_m_run_one_program(tmp_path) -> None:
     assert sorted(j.get("id") for j in root.iter("junction") if j.get("type") == "traffic_light") == ["A", "B"]
     far = ET.parse(build_sumo_net(_network(), tmp_path, NetConfig(tls="none", signals=("1_1", "1_2"))).net_file)
     assert sorted(t.get("id") for t in far.getroot().iter("tlLogic")) == ["1_1", "1_2"]
+
+
+def _build_in(work_dir: str) -> str:
+    return build_sumo_net(_network(), work_dir).net_file.name
+
+
+def test_parallel_builds_of_one_network_share_the_cache_safely(tmp_path) -> None:
+    """Four processes build the same network into one empty cache at once (a campaign's workers): each gets the one
+    cached file, and no intermediate file is left behind."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(4, mp_context=mp.get_context("spawn")) as pool:
+        names = list(pool.map(_build_in, [str(tmp_path)] * 4))
+    assert len(set(names)) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == names[:1]
+    assert ET.parse(tmp_path / names[0]).getroot().find("edge") is not None

@@ -24,8 +24,10 @@ Coordinates: ``--offset.disable-normalization`` keeps SUMO's x-y equal to skytra
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 import subprocess
+import uuid
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -180,16 +182,22 @@ def build_sumo_net(network: RoadNetwork, work_dir: str | Path, config: NetConfig
     net_file = work / f"skytrack_{digest}.net.xml"
     edge_to_road = {e: r for r, e in road_ids.items()}
     if not net_file.is_file():
-        nod, edg = work / f"skytrack_{digest}.nod.xml", work / f"skytrack_{digest}.edg.xml"
+        own = f"{os.getpid()}_{uuid.uuid4().hex[:8]}"  # runs in parallel (a campaign's workers) never share a file
+        nod, edg = work / f"skytrack_{digest}.{own}.nod.xml", work / f"skytrack_{digest}.{own}.edg.xml"
         nod.write_text(nodes_xml)
         edg.write_text(edges_xml)
-        tmp = work / f"skytrack_{digest}.tmp.net.xml"
+        tmp = work / f"skytrack_{digest}.{own}.tmp.net.xml"
         cmd = [str(sumo_binary("netconvert")), "--node-files", str(nod), "--edge-files", str(edg),
                "--output-file", str(tmp), *args]
-        res = subprocess.run(cmd, capture_output=True, text=True, timeout=config.timeout_s, check=False)
-        if res.returncode != 0 or not tmp.is_file():
-            raise RuntimeError(f"netconvert failed (exit {res.returncode}): {res.stderr.strip() or res.stdout.strip()}")
-        tmp.replace(net_file)  # atomic: a half-written file is never taken for a cached network
+        try:
+            res = subprocess.run(cmd, capture_output=True, text=True, timeout=config.timeout_s, check=False)
+            if res.returncode != 0 or not tmp.is_file():
+                raise RuntimeError(f"netconvert failed (exit {res.returncode}): "
+                                   f"{res.stderr.strip() or res.stdout.strip()}")
+            tmp.replace(net_file)  # atomic: a half-written file is never taken for a cached network
+        finally:
+            for f in (nod, edg, tmp):
+                f.unlink(missing_ok=True)
     return SumoNet(net_file=net_file, edge_to_road=edge_to_road, road_to_edge=dict(road_ids))
 
 

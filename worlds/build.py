@@ -116,7 +116,8 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
                 issues.append(WorldIssue(f"traffic.signals[{i}]", nid, f"a junction node id of the network (e.g. "
                                                                        f"{sample})"))
         for i, f in enumerate(world.traffic.flows):
-            for key, rid in (("from", f.origin), ("to", f.destination)):
+            via = ((f"via[{k}]", r) for k, r in enumerate(f.via))
+            for key, rid in (("from", f.origin), ("to", f.destination), *via):
                 if rid not in network.roads:
                     sample = ", ".join(list(network.roads)[:6])
                     issues.append(WorldIssue(f"traffic.flows[{i}].{key}", rid, f"a road id of the network (e.g. "

@@ -84,6 +84,7 @@ class FlowSpec(Strict):
 
     origin: str = Field(alias="from", min_length=1, description="road id the vehicles depart from (its start)")
     destination: str = Field(alias="to", min_length=1, description="road id the vehicles arrive on (its end)")
+    via: list[str] = Field(default_factory=list, description="road ids the route passes, in order")
     per_hour: float = Field(gt=0, le=36000.0, description="mean departures per hour (Poisson), in (0, 36000]")
     begin_s: NonNegFloat = Field(0.0, description="first second of departures, s")
     end_s: PositiveFloat | None = Field(None, description="departures stop here, s (> begin_s); none: never")

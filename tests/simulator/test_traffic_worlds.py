@@ -150,6 +150,10 @@ def test_flows_and_trips_are_checked_against_the_engine_slots_and_roads():
     with pytest.raises(WorldError) as info:
         run("road_standoff", duration=1.0, overrides=[*SUMO, "traffic.flows=[{from: h0_0.f, to: nope, per_hour: 60}]"])
     assert "traffic.flows[0].to" in str(info.value) and "'nope'" in str(info.value)
+    with pytest.raises(WorldError) as info:
+        run("road_standoff", duration=1.0,
+            overrides=[*SUMO, "traffic.flows=[{from: h0_0.f, to: h5_0.f, via: [h1_0.f, gone], per_hour: 60}]"])
+    assert "traffic.flows[0].via[1]" in str(info.value) and "'gone'" in str(info.value)
 
 
 def test_free_sumo_slots_are_not_scored_as_vehicles(tmp_path):

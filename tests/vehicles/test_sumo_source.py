@@ -402,3 +402,25 @@ def test_signal_reads_the_lights_of_a_link_as_sumo_shows_them(client, work_dir) 
                 seen[(a, b)].add(got)
         assert all({"r", "G"} <= s for s in seen.values())
         assert tr.signal("h0_0.f", "h1_0.f") == ""  # junction 1_0 has no light
+
+
+@needs_sumo
+def test_a_flow_via_roads_takes_them_in_order(client, work_dir) -> None:
+    """From h0_0.f to h2_0.f the fastest route is straight along y = 0; via v1_1.f (x = 150, northbound above the
+    first row) it detours north and back: the flow's route passes its via road, and its ends are the flow's."""
+    from vehicles.sumo.demand import DemandConfig, Flow
+
+    straight = (Flow(origin="h0_0.f", destination="h2_0.f", per_hour=60.0),)
+    detour = (Flow(origin="h0_0.f", destination="h2_0.f", per_hour=60.0, via=("v1_1.f",)),)
+    routes = []
+    for flows in (straight, detour):
+        with _traffic(_grid(), client, work_dir, n_vehicles=0, n_slots=4, demand=DemandConfig(flows=flows)) as tr:
+            edges = list(tr._lib.route.getEdges("fr0"))
+            routes.append([tr.net.edge_to_road[e] for e in edges])
+    assert routes[0] == ["h0_0.f", "h1_0.f", "h2_0.f"]
+    assert routes[1][0] == "h0_0.f" and routes[1][-1] == "h2_0.f" and "v1_1.f" in routes[1]
+    assert len(routes[1]) > len(routes[0]) and len(set(routes[1])) == len(routes[1])
+    with pytest.raises(ValueError, match="flow 0: via 'nope' is not a road of the network"):
+        _traffic(_grid(), client, work_dir, n_vehicles=0, n_slots=4,
+                 demand=DemandConfig(flows=(Flow(origin="h0_0.f", destination="h2_0.f", per_hour=60.0,
+                                                 via=("nope",)),)))

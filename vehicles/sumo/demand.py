@@ -8,9 +8,10 @@ from SUMO's own generator, seeded with ``--seed``. So the number of vehicles on 
 while a new trip waits for room to enter), and one seed gives one run.
 
 Flows. A :class:`Flow` sends vehicles from the start of one road to the end of another along SUMO's fastest route
-between them, departing as a Poisson process of ``per_hour`` vehicles an hour within ``[begin_s, end_s)``: at each
-SUMO step the number of departures over the step's overlap with that window is drawn from the same generator
-(Poisson, mean ``per_hour / 3600 · overlap``), so a count over T seconds is Poisson with mean ``per_hour · T / 3600``.
+between them (through the roads ``via``, in order, if given), departing as a Poisson process of ``per_hour``
+vehicles an hour within ``[begin_s, end_s)``: at each SUMO step the number of departures over the step's overlap with
+that window is drawn from the same generator (Poisson, mean ``per_hour / 3600 · overlap``), so a count over T seconds
+is Poisson with mean ``per_hour · T / 3600``.
 The flows share the scene slots the trips leave (``capacity``); a departure that would need more is refused and
 counted (:attr:`FlowStreams.refused`; the source records a ``traffic_flow_refused`` event), never queued unseen.
 """
@@ -35,6 +36,8 @@ class Flow:
     ----------
     origin, destination : str
         skytrack road ids: departures at the start of ``origin``, arrivals at the end of ``destination``.
+    via : tuple[str, ...]
+        Road ids the route passes, in order (SUMO's fastest route from each to the next).
     per_hour : float
         Mean departures per hour (> 0).
     begin_s, end_s : float
@@ -46,8 +49,10 @@ class Flow:
     per_hour: float
     begin_s: float = 0.0
     end_s: float = math.inf
+    via: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "via", tuple(self.via))
         if not (math.isfinite(self.per_hour) and self.per_hour > 0):
             raise ValueError(f"Flow.per_hour must be finite and > 0, got {self.per_hour!r}")
         if not (math.isfinite(self.begin_s) and 0 <= self.begin_s < self.end_s):
@@ -197,13 +202,16 @@ class FlowStreams:
         self.refused = [0] * len(self.flows)
         self.alive: set[str] = set()
         for k, f in enumerate(self.flows):
-            for what, road in (("origin", f.origin), ("destination", f.destination)):
+            stops = [("origin", f.origin), *(("via", r) for r in f.via), ("destination", f.destination)]
+            for what, road in stops:
                 if road not in road_to_edge:
                     raise ValueError(f"flow {k}: {what} {road!r} is not a road of the network")
-            a, b = road_to_edge[f.origin], road_to_edge[f.destination]
-            edges = [a] if a == b else list(lib.simulation.findRoute(a, b, vType=type_id).edges)
-            if not edges:
-                raise ValueError(f"flow {k}: no route from {f.origin!r} to {f.destination!r}")
+            edges = [road_to_edge[f.origin]]
+            for (_, a), (_, b) in zip(stops, stops[1:], strict=False):  # the fastest route between consecutive roads
+                leg = list(lib.simulation.findRoute(road_to_edge[a], road_to_edge[b], vType=type_id).edges)
+                if a != b and not leg:
+                    raise ValueError(f"flow {k}: no route from {a!r} to {b!r}")
+                edges += leg[1:]
             lib.route.add(f"{prefix}r{k}", edges)
 
     def owns(self, vehicle_id: str) -> bool:

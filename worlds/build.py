@@ -100,28 +100,7 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
     for i, b in enumerate(world.buildings):
         buildings.append(Building.cuboid(b.center, b.size, float(np.radians(b.yaw_deg)), name=f"b{i}"))
 
-    issues = []
-    if network is not None:
-        for i, g in enumerate(world.ground_vehicles):
-            ids = g.route.roads or [g.route.random_walk_from]
-            for k, rid in enumerate(ids):
-                if rid not in network.roads:
-                    key = f"ground_vehicles[{i}].route." + (f"roads[{k}]" if g.route.roads else "random_walk_from")
-                    sample = ", ".join(list(network.roads)[:6])
-                    issues.append(WorldIssue(key, rid, f"a road id of the network (e.g. {sample}; "
-                                                       f"a street 's' gives roads 's.f' and 's.r')"))
-        for i, nid in enumerate(world.traffic.signals):
-            if nid not in network.nodes:
-                sample = ", ".join(list(network.nodes)[:6])
-                issues.append(WorldIssue(f"traffic.signals[{i}]", nid, f"a junction node id of the network (e.g. "
-                                                                       f"{sample})"))
-        for i, f in enumerate(world.traffic.flows):
-            via = ((f"via[{k}]", r) for k, r in enumerate(f.via))
-            for key, rid in (("from", f.origin), ("to", f.destination), *via):
-                if rid not in network.roads:
-                    sample = ", ".join(list(network.roads)[:6])
-                    issues.append(WorldIssue(f"traffic.flows[{i}].{key}", rid, f"a road id of the network (e.g. "
-                                                                               f"{sample})"))
+    issues = [] if network is None else _unknown_ids(world, network)
     issues += _starts_in_buildings(world, buildings[:len(buildings) - len(world.buildings)])
     if issues:
         raise WorldError(file, issues)
@@ -131,6 +110,24 @@ def build_geometry(world: World, world_file: Path, rng: np.random.Generator) -> 
 
         mesh = road_surface_mesh(network)
     return WorldGeometry(network=network, buildings=buildings, road_mesh=mesh, signals=signals)
+
+
+def _unknown_ids(world: World, network: RoadNetwork) -> list[WorldIssue]:
+    """The road and node ids the world names (routes, traffic flows, traffic signals) that ``network`` lacks."""
+    roads: list[tuple[str, str]] = []
+    for i, g in enumerate(world.ground_vehicles):
+        where = f"ground_vehicles[{i}].route."
+        roads += ([(f"{where}roads[{k}]", r) for k, r in enumerate(g.route.roads)] if g.route.roads
+                  else [(f"{where}random_walk_from", g.route.random_walk_from)])
+    for i, f in enumerate(world.traffic.flows):
+        roads += [(f"traffic.flows[{i}].from", f.origin), (f"traffic.flows[{i}].to", f.destination)]
+        roads += [(f"traffic.flows[{i}].via[{k}]", r) for k, r in enumerate(f.via)]
+    nodes = [(f"traffic.signals[{i}]", n) for i, n in enumerate(world.traffic.signals)]
+    road_hint = f"a road id of the network (e.g. {', '.join(list(network.roads)[:6])}; a street 's' gives roads " \
+                "'s.f' and 's.r')"
+    node_hint = f"a node id of the network (e.g. {', '.join(list(network.nodes)[:6])})"
+    return ([WorldIssue(key, rid, road_hint) for key, rid in roads if rid not in network.roads]
+            + [WorldIssue(key, nid, node_hint) for key, nid in nodes if nid not in network.nodes])
 
 
 def _import_osm(path: Path, bbox: Any, default_height: float) -> tuple[Any, Any]:

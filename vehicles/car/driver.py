@@ -36,6 +36,7 @@ from vehicles.car.route import Route, RoutePlan
 __all__ = ["Driver"]
 
 _BACK_MARGIN = 5.0  # metres of already-driven lane kept at the start of a rebuilt path
+_RED, _YELLOW = ("r", "R", "u"), ("y", "Y")  # light states (SUMO's letters) that stop a car (module docstring)
 
 
 def _wrap(a: float) -> float:
@@ -189,9 +190,9 @@ class Driver:
             return False
         state = self.signal(*link)
         slack = self.config.stop_window  # a car braking to the line keeps stopping there (a planned stop's window)
-        if state in ("r", "R", "u"):
+        if state in _RED:
             return distance >= v * v / (2.0 * self.decel_max) - slack
-        return state in ("y", "Y") and distance >= v * v / (2.0 * self.decel_plan) - slack
+        return state in _YELLOW and distance >= v * v / (2.0 * self.decel_plan) - slack
 
     # --------------------------------------------------------------- update
     def update(self, p_xy: np.ndarray, yaw: float, speed: float, tick: int, leader: LeaderInfo | None = None,
@@ -216,20 +217,19 @@ class Driver:
             if stop[1] < 0:
                 self.mode = "done"
                 self._event("car_route_end", road=road)
-            elif not self.plan.stop_flags[stop[1]]:  # a light: wait until it no longer shows red or yellow
-                self.mode = "stopped"
-                self._at_light = self._link(stop[1])
-                self._event("car_stop", road=road, node=self.network.roads[self.plan.road_ids[stop[1]]].end_node,
-                            dwell=None, light=True)
             else:
                 self.mode = "stopped"
-                self._stop_road = self.plan.road_ids[stop[1]]
-                dwell = float(self.rng.uniform(*cfg.dwell_range))
-                self._release_tick = tick + int(round(dwell * self._ticks_per_second))
-                self._event("car_stop", road=road, node=self.network.roads[self.plan.road_ids[stop[1]]].end_node,
-                            dwell=dwell)
+                node = self.network.roads[self.plan.road_ids[stop[1]]].end_node
+                if not self.plan.stop_flags[stop[1]]:  # a light: wait until it no longer shows red or yellow
+                    self._at_light = self._link(stop[1])
+                    self._event("car_stop", road=road, node=node, dwell=None, light=True)
+                else:
+                    self._stop_road = self.plan.road_ids[stop[1]]
+                    dwell = float(self.rng.uniform(*cfg.dwell_range))
+                    self._release_tick = tick + int(round(dwell * self._ticks_per_second))
+                    self._event("car_stop", road=road, node=node, dwell=dwell)
         if self.mode == "stopped" and self._at_light is not None:
-            if self.signal is None or self.signal(*self._at_light) not in ("r", "R", "u", "y", "Y"):
+            if self.signal is None or self.signal(*self._at_light) not in _RED + _YELLOW:
                 self.mode, self._at_light = "drive", None
                 self._event("car_go", road=self.road_position()[0])
                 stop = self._next_stop(proj.s, v)

@@ -7,6 +7,7 @@ plane matters; guidance laws use the horizontal components and say so.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,6 +92,25 @@ class TargetEstimate:
                 raise ValueError(f"TargetEstimate.P must be a finite ({n}, {n}) array, got shape {P.shape}")
             P.setflags(write=False)
             object.__setattr__(self, "P", P)
+
+    @classmethod
+    def of_arrays(cls, t: float, p_W: np.ndarray, v_W: np.ndarray, P: np.ndarray | None) -> TargetEstimate:
+        """The estimate made of float64 arrays the caller hands over (made read-only, not copied: pass fresh ones),
+        checked as the constructor checks them (anything else goes through the constructor, with its errors). A
+        fraction of the constructor's cost, which converts and copies whatever it is given: for a tracker reporting
+        hundreds of tracks at every step."""
+        n = p_W.shape[0] if p_W.ndim == 1 else 0
+        plain = (isinstance(t, float) and math.isfinite(t) and n in (2, 3) and p_W.dtype == np.float64
+                 and v_W.dtype == np.float64 and v_W.shape == (n,) and all_finite(p_W) and all_finite(v_W)
+                 and (P is None or (P.dtype == np.float64 and P.shape == (2 * n, 2 * n) and all_finite(P))))
+        if not plain:
+            return cls(t=t, p_W=p_W, v_W=v_W, P=P)
+        est = object.__new__(cls)
+        for name, value in (("t", float(t)), ("p_W", p_W), ("v_W", v_W), ("P", P)):
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+            object.__setattr__(est, name, value)
+        return est
 
     def predict_xy(self, t: np.ndarray | float) -> np.ndarray:
         """Constant-velocity prediction of the horizontal position, p(t) = p + v (t − t_est) (m); shape (..., 2)."""

@@ -279,3 +279,18 @@ def test_unresolved_pairs_mix_at_once_whatever_their_order():
     expected = {1: c[1] + 0.1 * (c[2] - c[1]), 2: c[2] + 0.1 * (c[1] + c[3] - 2 * c[2]), 3: c[3] + 0.1 * (c[2] - c[3])}
     for k in (1, 2, 3):  # total continuity kept, so the probabilities are the parts themselves
         assert results[0][k] == pytest.approx(expected[k], rel=1e-9)
+
+
+def test_equally_probable_tracks_give_the_smallest_id_and_the_belief_says_what_it_holds():
+    ident = TargetIdentity(_config(background_density=1e-3, min_probability=0.1))
+    for k in (7, 3, 5):  # no cue: each new track takes H_0's weight, so all four hypotheses end at 1/4
+        ident.confirmed(k, 0.0, np.zeros(2), np.eye(2), evidence=0.0)
+    ident.deleted(7, 1.0, np.zeros(2), np.zeros(2), np.eye(2))
+    assert ident.held == 2 and ident.holds(3) and ident.holds(5) and not ident.holds(7)
+    assert ident.probability(3) == ident.probability(5) and ident.target() == 3
+    assert list(ident.weights) == [3, 5]  # in the order the tracks were taken
+    snapshot = ident.weights
+    snapshot[3] = 1.0
+    assert ident.probability(3) != 1.0  # a copy
+    assert ident.probability(7) == 0.0
+    assert sum(ident.weights.values()) + ident.w_none == pytest.approx(1.0, abs=1e-15)

@@ -48,3 +48,34 @@ def test_all_finite_finds_one_bad_entry_anywhere(bad):
     with pytest.raises(ValueError, match="P must be a finite"):
         TargetEstimate(t=0.0, p_W=np.zeros(2), v_W=np.zeros(2), P=np.diag([1.0, 1.0, 1.0, bad]))
     assert TargetEstimate(t=0.0, p_W=np.array([1e200, 0.0]), v_W=np.zeros(2)).p_W[0] == 1e200
+
+
+def test_estimate_of_arrays_equals_the_constructors_and_takes_the_arrays_read_only():
+    p, v, P = np.array([1.0, -2.0]), np.array([0.5, 3.0]), np.arange(16.0).reshape(4, 4)
+    made = TargetEstimate.of_arrays(2.5, p, v, P)
+    ref = TargetEstimate(t=2.5, p_W=[1.0, -2.0], v_W=[0.5, 3.0], P=np.arange(16.0).reshape(4, 4))
+    assert made.t == ref.t and type(made.t) is float
+    for a, b in ((made.p_W, ref.p_W), (made.v_W, ref.v_W), (made.P, ref.P)):
+        assert a.dtype == b.dtype and np.array_equal(a, b) and not a.flags.writeable
+    assert made.p_W is p  # handed over, not copied
+    assert TargetEstimate.of_arrays(1.0, np.zeros(3), np.zeros(3), None).P is None
+
+
+@pytest.mark.parametrize("p, v, P, match", [
+    (np.array([np.nan, 0.0]), np.zeros(2), np.eye(4), "p_W"),
+    (np.zeros(2), np.array([0.0, np.inf]), np.eye(4), "v_W"),
+    (np.zeros(2), np.zeros(2), np.full((4, 4), np.nan), "P"),
+    (np.zeros(2), np.zeros(2), np.eye(6), "P"),
+    (np.zeros(4), np.zeros(4), None, "p_W"),
+    (np.zeros(2), np.zeros(3), None, "v_W"),
+])
+def test_estimate_of_arrays_refuses_what_the_constructor_refuses(p, v, P, match):
+    with pytest.raises(ValueError, match=match):
+        TargetEstimate.of_arrays(0.0, p, v, P)
+    with pytest.raises(ValueError, match="t"):
+        TargetEstimate.of_arrays(float("nan"), np.zeros(2), np.zeros(2), None)
+
+
+def test_estimate_of_arrays_converts_other_arrays_as_the_constructor_does():
+    made = TargetEstimate.of_arrays(1, np.array([1, 2]), np.array([0, 0], dtype=np.float32), None)
+    assert made.t == 1.0 and made.p_W.dtype == np.float64 and made.v_W.dtype == np.float64

@@ -189,10 +189,29 @@ class TargetIdentity:
 
     def __init__(self, config: IdentityConfig) -> None:
         self.config = config
-        self.weights: dict[int, float] = {}
+        # the weights of the hypotheses "track k is the target", in the order the tracks were taken: an array, so
+        # that renormalising after each of a scan's hundreds of class readings is one vector operation
+        self._ids: list[int] = []
+        self._at: dict[int, int] = {}  # track id -> index in _ids and _w
+        self._w = np.zeros(0)
         self.evidence: dict[int, float] = {}
         self.w_none = 1.0
         self.centre: SearchCentre | None = None
+
+    @property
+    def weights(self) -> dict[int, float]:
+        """A copy of the probabilities of the tracks the belief holds (track id → probability), in the order the
+        tracks were taken."""
+        return dict(zip(self._ids, self._w.tolist(), strict=True))
+
+    @property
+    def held(self) -> int:
+        """How many tracks the belief holds."""
+        return len(self._ids)
+
+    def holds(self, track_id: int) -> bool:
+        """Whether the belief holds track ``track_id``."""
+        return track_id in self._at
 
     def cue(self, t: float, p: np.ndarray, sigma_m: float) -> None:
         """The hand-off: the target is near ``p`` (m) at ``t`` (s) with standard deviation ``sigma_m`` (m) per axis."""
@@ -201,14 +220,17 @@ class TargetIdentity:
 
     def probability(self, track_id: int) -> float:
         """Probability that track ``track_id`` is the target (0 for a track the belief does not hold)."""
-        return self.weights.get(track_id, 0.0)
+        i = self._at.get(track_id)
+        return 0.0 if i is None else float(self._w[i])
 
     def target(self) -> int | None:
-        """Id of the most probable track if its probability reaches ``min_probability``, else None."""
-        if not self.weights:
+        """Id of the most probable track (of equally probable ones, the smallest id) if its probability reaches
+        ``min_probability``, else None."""
+        if not self._ids:
             return None
-        k = max(self.weights, key=lambda j: (self.weights[j], -j))
-        return k if self.weights[k] >= self.config.min_probability else None
+        top = self._w.max()
+        k = min(self._ids[i] for i in np.flatnonzero(self._w == top).tolist())
+        return k if top >= self.config.min_probability else None
 
     def confirmed(self, track_id: int, t: float, p: np.ndarray, P: np.ndarray, evidence: float) -> None:
         """Track ``track_id`` was confirmed at ``t`` (s) at position ``p`` (m) with covariance ``P`` (2×2, m²) and
@@ -222,7 +244,7 @@ class TargetIdentity:
             maha = float(d @ np.linalg.solve(S, d))
             density = math.exp(-0.5 * maha) / (2.0 * math.pi * math.sqrt(max(np.linalg.det(S), 1e-300)))
         odds = math.exp(min(evidence, 50.0)) * density / self.config.background_density  # relative to ρ
-        self.weights[track_id] = self.w_none * odds  # every other hypothesis keeps its weight × ρ / ρ
+        self._set(track_id, self.w_none * odds)  # every other hypothesis keeps its weight × ρ / ρ
         self.evidence[track_id] = min(evidence, 50.0)
         self._normalise()
 
@@ -232,16 +254,17 @@ class TargetIdentity:
         weight changes by ``exp(evidence − previous evidence)``. If that takes the track from likelier the target than
         ``H_0`` to less likely (its readings turned: it swapped onto another car), the target is believed to be near
         where the track is, ``where()`` = (t, p, v, P) as for :meth:`deleted`, and searched for from there."""
-        if track_id not in self.weights:
+        i = self._at.get(track_id)
+        if i is None:
             return
         new = max(min(float(evidence), 50.0), -50.0)
         change = new - self.evidence.get(track_id, 0.0)
         self.evidence[track_id] = new
         if change != 0.0:
-            was_likelier = self.weights[track_id] > self.w_none
-            self.weights[track_id] *= math.exp(change)
+            was_likelier = self._w[i] > self.w_none
+            self._w[i] *= math.exp(change)
             self._normalise()
-            if was_likelier and self.weights[track_id] <= self.w_none and where is not None:
+            if was_likelier and self._w[i] <= self.w_none and where is not None:
                 t, p, v, P = where()
                 self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(),
                                            v=np.asarray(v, dtype=float)[:2].copy(),
@@ -251,7 +274,7 @@ class TargetIdentity:
         """Track ``track_id`` was dropped at ``t`` (s) with last estimate ``p`` (m), ``v`` (m/s), position
         covariance ``P`` (m²): its weight joins ``H_0``, and if it was likelier the target than ``H_0`` was, the
         search centre moves to its estimate."""
-        w = self.weights.pop(track_id, None)
+        w = self._pop(track_id)
         self.evidence.pop(track_id, None)
         if w is None:
             return
@@ -267,7 +290,7 @@ class TargetIdentity:
         positions ``unassigned`` (m): the pairs of tracks it could not tell apart (``unresolved``) may have swapped
         (:meth:`_forget_continuity`), and unless one of ``unassigned`` lies in the search region's 99 % ellipse,
         ``H_0`` is less likely by ``1 − q`` (module docstring)."""
-        if not self.weights:
+        if not self._ids:
             return
         self._forget_continuity(self.config.swap_probability, unresolved)
         q = self.config.search_detection_probability
@@ -292,7 +315,7 @@ class TargetIdentity:
         history, and its own class readings can take the belief; tracks that never met keep their continuity."""
         if delta <= 0.0 or not unresolved:
             return
-        c = {k: w * math.exp(-self.evidence.get(k, 0.0)) for k, w in self.weights.items()}
+        c = {k: w * math.exp(-self.evidence.get(k, 0.0)) for k, w in zip(self._ids, self._w.tolist(), strict=True)}
         pairs = [(a, b) for a, b in unresolved if a in c and b in c]
         if not pairs:
             return
@@ -304,15 +327,17 @@ class TargetIdentity:
         for a, b in pairs:  # all pairs at once, from the scan's parts: the order of the pairs does not matter
             new[a] += delta * (c[b] - c[a])
             new[b] += delta * (c[a] - c[b])
-        self.weights = {k: ck * math.exp(self.evidence.get(k, 0.0)) for k, ck in new.items()}
+        self._w = np.array([ck * math.exp(self.evidence.get(k, 0.0)) for k, ck in new.items()], dtype=float)
         self._normalise()
 
     def merged(self, kept: int, dropped: int) -> None:
         """Track ``dropped`` was found to be a duplicate of ``kept``: ``kept`` takes its weight."""
-        w = self.weights.pop(dropped, 0.0)
+        w = self._pop(dropped)
+        w = 0.0 if w is None else w
         self.evidence.pop(dropped, None)
-        if kept in self.weights:
-            self.weights[kept] += w
+        i = self._at.get(kept)
+        if i is not None:
+            self._w[i] += w
         else:
             self.w_none += w
         self._normalise()
@@ -321,18 +346,43 @@ class TargetIdentity:
         """The probabilities each track would have with the teammates' class evidence ``log_ratios`` (per own track
         id) added, without changing this belief (evidence from other UAVs' sensors is used, never stored, so it is
         never counted twice)."""
-        w = {k: v * math.exp(max(min(log_ratios.get(k, 0.0), 50.0), -50.0)) for k, v in self.weights.items()}
+        w = {k: v * math.exp(max(min(log_ratios.get(k, 0.0), 50.0), -50.0))
+             for k, v in zip(self._ids, self._w.tolist(), strict=True)}
         total = sum(w.values()) + self.w_none
         return {k: v / total for k, v in w.items()}
 
     def _normalise(self) -> None:
-        total = sum(self.weights.values()) + self.w_none
+        # the weights summed one after another in their order (np.cumsum, as Python's sum of floats before 3.12), then
+        # each divided by the total: the same floating-point operations as on a dict of them
+        total = (float(np.cumsum(self._w)[-1]) if self._ids else 0.0) + self.w_none
         if not total > 0:
-            self.weights = dict.fromkeys(self.weights, 0.0)
+            self._w = np.zeros(len(self._ids))
             self.w_none = 1.0
             return
-        self.weights = {k: v / total for k, v in self.weights.items()}
+        self._w /= total
         self.w_none /= total
+
+    def _set(self, track_id: int, weight: float) -> None:
+        """Track ``track_id``'s (unnormalised) weight: a new track's is appended after those held."""
+        i = self._at.get(track_id)
+        if i is not None:
+            self._w[i] = weight
+            return
+        self._at[track_id] = len(self._ids)
+        self._ids.append(track_id)
+        self._w = np.append(self._w, weight)
+
+    def _pop(self, track_id: int) -> float | None:
+        """Remove track ``track_id`` from the belief; its weight, or None if it was not held."""
+        i = self._at.pop(track_id, None)
+        if i is None:
+            return None
+        w = float(self._w[i])
+        del self._ids[i]
+        self._w = np.delete(self._w, i)
+        for j in range(i, len(self._ids)):
+            self._at[self._ids[j]] = j
+        return w
 
     def search_estimate(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
         """Mean and covariance of where the target is believed to be at ``t`` (s) while in no track; None without a

@@ -149,7 +149,9 @@ class MultiTargetTracker:
         self.tracks: list[Track] = []
         self._ix = [self.layout.index("x"), self.layout.index("y")]
         self._iv = [self.layout.index("vx"), self.layout.index("vy")]
-        self._ipv = np.ix_(self._ix + self._iv, self._ix + self._iv)  # (x, y, vx, vy) block of a covariance
+        self._ix_at, self._iv_at = np.array(self._ix), np.array(self._iv)
+        pv, n = self._ix + self._iv, len(self.layout)
+        self._ipv = np.array([[r * n + c for c in pv] for r in pv])  # (x, y, vx, vy) block of a covariance, flat
         self._next_id = 1
         self._target: int | None = None
         self.updates = 0
@@ -342,7 +344,7 @@ class MultiTargetTracker:
     def _unresolved(self, live: Sequence[Track]) -> list[tuple[int, int]]:
         """Pairs of ids of confirmed tracks the identity belief holds whose estimates' difference lies inside the
         99 % χ² gate of their summed position covariances (within ``UNRESOLVED_RADIUS_M`` first)."""
-        held = [tr for tr in live if tr.confirmed and tr.track_id in self.identity.weights]
+        held = [tr for tr in live if tr.confirmed and self.identity.holds(tr.track_id)]
         if len(held) < 2:
             return []
         p = np.array([tr.filter.x[self._ix] for tr in held])
@@ -363,7 +365,7 @@ class MultiTargetTracker:
         swap probability), and the ground fixes of the detections no confirmed track took (unassigned ones, and those
         tentative tracks took; with a search detection probability). Neither is computed when its setting is 0."""
         cfg = self.identity.config
-        if not self.identity.weights or (cfg.swap_probability <= 0 and cfg.search_detection_probability <= 0):
+        if not self.identity.held or (cfg.swap_probability <= 0 and cfg.search_detection_probability <= 0):
             return
         points = []
         if cfg.search_detection_probability > 0:
@@ -483,7 +485,8 @@ class MultiTargetTracker:
 
     def _estimate(self, track: Track) -> TargetEstimate:
         x = track.filter.x
-        return TargetEstimate(t=track.filter.t, p_W=x[self._ix], v_W=x[self._iv], P=track.filter.P[self._ipv])
+        return TargetEstimate.of_arrays(track.filter.t, x.take(self._ix_at), x.take(self._iv_at),
+                                         track.filter.P.take(self._ipv))
 
 
 def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionModel, target_height: float,

@@ -251,7 +251,7 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
             team.observer = _search_record(team, truth, recorder, car_ids, target_ids, car_kinds, decoys)
     contacts = None if quads is None else PybulletContacts(scene, quads, cars, uav_ids, car_ids)
     if cars is not None and quads is not None:  # the kinematic cars' boxes near a UAV follow them every step
-        cars.near_points = lambda: quads.live_state.p_W[:, :2]
+        cars.near_points = lambda: quads.live_state.p_W
     return Assembly(clock=clock, scene=scene, truth=truth, comms=comms,
                     recording=Recording(recorder, uav_ids, car_ids, contacts), teams=teams, scene_query=query,
                     uav_ids=uav_ids, car_ids=car_ids,

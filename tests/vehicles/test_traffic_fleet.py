@@ -11,7 +11,7 @@ from car_fixtures import bullet_client, grid_network
 from vehicles.car.driver import Driver
 from vehicles.car.driver_config import DriverConfig
 from vehicles.car.dynamics import KinematicDynamics
-from vehicles.car.fleet import CarFleet
+from vehicles.car.fleet import SYNC_RADIUS, CarFleet
 from vehicles.car.params import load_car
 from vehicles.car.route import Route
 from vehicles.car.traffic import find_leaders
@@ -179,7 +179,7 @@ def test_boxes_near_a_watched_point_follow_their_cars_every_step_so_contacts_see
     ball = p.createMultiBody(1.0, p.createCollisionShape(p.GEOM_SPHERE, radius=r, physicsClientId=client),
                              basePosition=[float(spot[0]), float(spot[1]), r], physicsClientId=client)
     if watched:
-        fleet.near_points = lambda: np.array([p.getBasePositionAndOrientation(ball, physicsClientId=client)[0][:2]])
+        fleet.near_points = lambda: np.array([p.getBasePositionAndOrientation(ball, physicsClientId=client)[0]])
     touched = False
     for tick in range(1, 240 * 12 + 1):
         fleet.apply_actuation()
@@ -188,3 +188,30 @@ def test_boxes_near_a_watched_point_follow_their_cars_every_step_so_contacts_see
         touched |= bool(p.getContactPoints(bodyA=ball, bodyB=int(fleet.body_ids[0]), physicsClientId=client))
     assert float(np.linalg.norm(fleet.state.p_W[0, :2] - spot)) > 20.0  # the car drove past the spot
     assert touched == watched
+
+
+@pytest.mark.parametrize("above_top_m, placed", [(SYNC_RADIUS - 0.5, True), (SYNC_RADIUS + 0.5, False)])
+def test_a_watched_point_high_above_every_box_places_none(client, above_top_m, placed):
+    """A point straight above a kinematic car (as a UAV flying over it): below ``SYNC_RADIUS`` over the box's top the
+    box follows the car every step, higher up it is out of any contact's reach and stays where it was placed."""
+    net = grid_network(3, 120.0)
+    cfg = DriverConfig(cruise_fraction_range=(1.0, 1.0), cruise_change_period=0.0, stop_probability=0.0)
+    fleet = CarFleet(client, [SEDAN], [cfg], [Route(roads=("h0_0.f", "h1_0.f"), start_s=5.0)], net, 240,
+                     np.random.default_rng(0), dynamics=["kinematic"])
+    body = int(fleet.body_ids[0])
+    base = p.getBasePositionAndOrientation(body, physicsClientId=client)[0][2]
+    top = p.getAABB(body, physicsClientId=client)[1][2]
+    assert top - base == pytest.approx(SEDAN.height - SEDAN.cog_height, abs=1e-3)  # the box's roof above its centre
+    spawn = np.array(p.getBasePositionAndOrientation(body, physicsClientId=client)[0][:2])
+    fleet.near_points = lambda: np.append(fleet.state.p_W[0, :2], top + above_top_m)[None, :]
+    for tick in range(1, 240 * 5 + 1):
+        fleet.apply_actuation()
+        p.stepSimulation(physicsClientId=client)
+        fleet.after_step(tick)
+    box = np.array(p.getBasePositionAndOrientation(body, physicsClientId=client)[0][:2])
+    car = fleet.state.p_W[0, :2]
+    assert float(np.linalg.norm(car - spawn)) > 5.0  # the car drove on
+    if placed:  # placed before the last step at the pose of that tick: one tick's travel behind at most
+        assert float(np.linalg.norm(box - car)) < 0.2
+    else:
+        assert np.array_equal(box, spawn)

@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pybullet as p
 from scipy.spatial import cKDTree
 
 from vehicles.car.driver import Driver
@@ -130,8 +131,10 @@ class CarFleet:
     Attributes
     ----------
     near_points : Callable[[], np.ndarray] | None
-        Where the run's other dynamic bodies are ((K, 2) m: the UAVs); each physics step first places the kinematic
-        cars' boxes within :data:`SYNC_RADIUS` of them or of a physics car. None: the physics cars only.
+        Where the run's other dynamic bodies are ((K, 3) m: the UAVs); each physics step first places the kinematic
+        cars' boxes within :data:`SYNC_RADIUS` of them or of a physics car. A body more than :data:`SYNC_RADIUS`
+        above the top of the highest box (a UAV at its cruise altitude) is within that distance of none, and places
+        none. None: the physics cars only.
     """
 
     def __init__(self, client_id: int, params: Sequence[CarParams], drivers: Sequence[DriverConfig],
@@ -190,11 +193,23 @@ class CarFleet:
         self._prev_rows = None
         self._cache: CarState | None = None
         self.near_points: Callable[[], np.ndarray] | None = None
+        self._near_ceiling = self._box_top() + SYNC_RADIUS  # m: no box is within reach of a body above it
+
+    def _box_top(self) -> float:
+        """The highest any kinematic car's box reaches (m): over each box, the top of its shape above its centre of
+        mass (PyBullet's bounding box) plus the height its centre of mass is placed at (``ground_z``); -inf
+        without kinematic cars."""
+        top = -np.inf
+        for _, fleet in [*self.traffic, *self.sources]:
+            for body, z in zip(fleet.body_ids.tolist(), np.asarray(fleet.ground_z, dtype=float).tolist(), strict=True):
+                base = p.getBasePositionAndOrientation(body, physicsClientId=self.client_id)[0][2]
+                top = max(top, z + p.getAABB(body, physicsClientId=self.client_id)[1][2] - base)
+        return top
 
     def _check_spawns(self, spawns: list[tuple[np.ndarray, float]]) -> None:
         if len(spawns) < 2:
             return
-        xy = np.array([p for p, _ in spawns])
+        xy = np.array([xy for xy, _ in spawns])
         half = 0.5 * np.array([par.length for par in self.params])
         tree = cKDTree(xy)
         for i, j in sorted(tree.query_pairs(2 * float(half.max()))):  # every pair closer than the longest car
@@ -265,7 +280,8 @@ class CarFleet:
         if self.traffic or self.sources:
             pts = [self._phys_readings()[0][:, 0:2]] if self._phys else []
             if self.near_points is not None:
-                pts.append(np.asarray(self.near_points(), dtype=float).reshape(-1, 2)[:, :2])
+                q = np.asarray(self.near_points(), dtype=float).reshape(-1, 3)
+                pts.append(q[q[:, 2] < self._near_ceiling, :2])
             if pts:
                 near = np.vstack(pts)
                 for _, fleet in [*self.traffic, *self.sources]:

@@ -18,6 +18,7 @@ from typing import Protocol, runtime_checkable
 
 from autonomy.diagnostics import HoldsTracks
 from autonomy.fusion.track_fusion import TrackFusion
+from autonomy.sensing.coverage import FrameCoverage
 from autonomy.sensing.measurement import Detection
 from interfaces.setpoints import Setpoint
 from interfaces.state import OwnState, TargetEstimate, TeammateState, TrackPicture
@@ -92,11 +93,17 @@ class Agent:
         self.idle = idle
         self.fusion = fusion
         self._pending: list[Detection] = []
+        self._coverage: list[FrameCoverage] = []
         self.estimate: TargetEstimate | None = None
 
     def receive(self, detections: Sequence[Detection]) -> None:
         """Queue detections; they are used at the first step at or after their arrival time."""
         self._pending.extend(detections)
+
+    def receive_coverage(self, coverage: FrameCoverage) -> None:
+        """Queue a camera frame's coverage; an estimator with ``observe_coverage`` (the multi-target tracker) gets it
+        with the detections of its step (:meth:`take_ready`), any other ignores it."""
+        self._coverage.append(coverage)
 
     def step(self, t: float, own: OwnState, teammates: Sequence[TeammateState],
              shared: Sequence[TargetEstimate | TrackPicture] = ()) -> AgentOutput:
@@ -111,6 +118,12 @@ class Agent:
         """
         ready = sorted((d for d in self._pending if d.t_arrival <= t + 1e-9), key=lambda d: d.t_meas)
         self._pending = [d for d in self._pending if d.t_arrival > t + 1e-9]
+        if self._coverage:
+            arrived = [c for c in self._coverage if c.t_arrival <= t + 1e-9]
+            self._coverage = [c for c in self._coverage if c.t_arrival > t + 1e-9]
+            observe = getattr(self.estimator, "observe_coverage", None)
+            if observe is not None and arrived:
+                observe(arrived)
         return ready
 
     def act(self, t: float, own: OwnState, teammates: Sequence[TeammateState], local: TargetEstimate | None,

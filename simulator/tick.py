@@ -171,9 +171,12 @@ class Assembly:
             self.comms.share_detections(slot.uav, list(out.detections), t, tick)
 
     def _deliver_scan(self, slot: SensorSlot, t: float, out: SensorOutput) -> None:
+        coverage = out.extras.get("coverage")
         for a in self.agents:
             if a.uav == slot.uav:
                 a.agent.receive(out.detections)
+                if coverage is not None:
+                    a.agent.receive_coverage(coverage)
         for team in self.teams:
             team.on_scan(slot.uav, t, slot.sensor.latency_s, out.extras)
 

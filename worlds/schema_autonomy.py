@@ -118,6 +118,12 @@ class TrackingSpec(Strict):
                               "weigh in its association with the tracks, against each track's readings: where cars "
                               "pass within the sensors' resolution a track keeps the car that looks like the one it "
                               "has been reading; false: position alone")
+    camera_detection_probability: float = Field(
+        0.0, ge=0, lt=1, description="negative information from cameras: the probability that a camera detects a car "
+        "it has in view (in its image, near enough, not hidden behind a building by its depth image); each frame that "
+        "shows no car where a confirmed track has one in view makes the track less likely to be there, and a track "
+        "the camera keeps looking at without seeing (the likelihood of its misses below 0.02) is dropped, so a target "
+        "track that lost its car is given up and the target searched for; 0: off")
     min_target_probability: float = Field(0.2, gt=0, le=1, description="the most probable track is taken for the "
                                           "target when its probability reaches this (following the best candidate "
                                           "lets a pointed camera confirm or reject it)")

@@ -50,6 +50,7 @@ from autonomy.estimation.measurements import BearingDetectionModel
 from interfaces.state import TargetEstimate
 
 from .classify import Classifier, check_classifiers, class_generator, read_classes
+from .coverage import FrameCoverage
 from .measurement import CLUTTER_ID, Detection, Sensor, SensorOutput, azimuth_elevation
 from .scene import CameraIntrinsics, CameraPose, RenderedImage, SceneQuery, SensorPose, TargetTruth, yaw_rot
 
@@ -329,4 +330,7 @@ class Camera(Sensor):
             readings = read_classes(cfg.classify, ids, targets, class_generator(rng))
             dets = [replace(d, classes=c) for d, c in zip(dets, readings, strict=True)]
         extras = {"frame": frame, "camera_pose": cam} if cfg.keep_frame else {}
+        extras["coverage"] = FrameCoverage(t_meas=tick_time_s, t_arrival=tick_time_s + cfg.latency_s,
+                                           sensor_id=self.sensor_id, camera=cam, intrinsics=self.intrinsics,
+                                           depth=frame.depth, min_blob_area_px=cfg.min_blob_area_px)
         return SensorOutput(detections=tuple(dets), truth_ids=np.asarray(ids, dtype=int), extras=extras)

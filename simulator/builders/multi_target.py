@@ -90,7 +90,8 @@ def _multi_config(uav: UavSpec) -> MultiTrackerConfig:
                               detection_probability=spec.detection_probability,
                               clutter_density=spec.clutter_density, merge_distance_m=spec.merge_distance_m,
                               merge_speed_mps=spec.merge_speed_mps, max_tracks=spec.max_tracks,
-                              class_aided=spec.class_aided)
+                              class_aided=spec.class_aided,
+                              camera_detection_probability=spec.camera_detection_probability)
 
 
 def multi_target(estimator: Any, world: World, uav: UavSpec, network: Any = None) -> Any:

@@ -4,6 +4,8 @@ target's detections."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.stats import binom
@@ -11,7 +13,7 @@ from scipy.stats import binom
 from autonomy.estimation.tracker import TrackerConfig
 from autonomy.estimation.tracking.gated import TargetGatedEstimator
 from autonomy.estimation.tracking.identity import IdentityConfig
-from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerConfig
+from autonomy.estimation.tracking.multi import UNSEEN_DROP, UNSEEN_NODES, MultiTargetTracker, MultiTrackerConfig
 from autonomy.sensing.measurement import ClassMeasurement, Detection
 
 SIGMA = 2.0  # m, position detections
@@ -248,3 +250,96 @@ def test_a_car_that_stops_and_drives_off_keeps_its_track_under_the_move_stop_imm
     assert mu[standing].mean() > 0.6 and mu[driving].mean() < 0.2
     assert err[standing].mean() < 0.8 * err_ekf[standing].mean()
     assert err.max() < 15.0
+
+
+# -- the cameras' negative information ------------------------------------------------------------------------------
+class _Cover:
+    """A frame's coverage whose view is the points with ``x >= x_min`` (a stand-in for a camera's)."""
+
+    def __init__(self, t: float, x_min: float = -np.inf, sensor: str = "cam") -> None:
+        self.t_meas = self.t_arrival = t
+        self.sensor_id, self.x_min = sensor, x_min
+
+    def visible(self, p_W):
+        return np.asarray(p_W)[:, 0] >= self.x_min
+
+
+def _tracker_seen(pd: float) -> MultiTargetTracker:
+    cfg = TrackerConfig(filter="ekf", model="cv", q=0.5, max_target_speed=30.0, lost_after_s=30.0)
+    ident = IdentityConfig(target_classes={"colour": 1}, background=BG, background_density=1e-5)
+    return MultiTargetTracker(cfg, MultiTrackerConfig(confirm_m=2, confirm_n=2, camera_detection_probability=pd),
+                              ident)
+
+
+def _one_track(tr: MultiTargetTracker) -> None:
+    for k in range(4):  # a standing car, seen by a position sensor: one confirmed track
+        tr.step(0.5 * k, [_det((100.0, 0.0), 0.5 * k)])
+    assert len(tr.tracks) == 1 and tr.tracks[0].confirmed
+
+
+def test_a_track_the_camera_keeps_seeing_nothing_at_is_dropped_on_the_law():
+    """Frames that have the whole track in view and show nothing: its score falls by log(1 − p_D) per frame and it
+    is dropped at the first frame that takes it below log(UNSEEN_DROP): p_D = 0.9, 0.1² < 0.02, the second frame;
+    p_D = 0.6, 0.4⁵ < 0.02 < 0.4⁴, the fifth. Its target probability joins "in no track", and the target is
+    searched for from its last estimate."""
+    for pd, frames in ((0.9, 2), (0.6, 5)):
+        tr = _tracker_seen(pd)
+        _one_track(tr)
+        tr.cue(1.5, np.array([100.0, 0.0]), 5.0)
+        track = tr.tracks[0]
+        for k in range(frames):
+            assert tr.tracks, (pd, k)
+            t = 2.0 + 0.5 * k
+            tr.observe_coverage([_Cover(t)])
+            est = tr.step(t, [])
+            assert track.unseen == pytest.approx((k + 1) * math.log1p(-pd))
+        assert not tr.tracks and tr.dropped_unseen == 1
+        assert frames * math.log1p(-pd) < math.log(UNSEEN_DROP) <= (frames - 1) * math.log1p(-pd)
+        assert tr.target_track_id is None
+        np.testing.assert_allclose(est.p_W, [100.0, 0.0], atol=1.0)  # the search starts where the track was
+
+
+def test_the_visible_share_is_the_gauss_hermite_average_of_the_view():
+    """A view of the half-plane x >= mean x + 1σ: the share is the Gauss–Hermite weight of the nodes there."""
+    tr = _tracker_seen(0.9)
+    _one_track(tr)
+    track = tr.tracks[0]
+    sigma_x = math.sqrt(track.filter.P[0, 0])
+    nodes, weights = np.polynomial.hermite_e.hermegauss(UNSEEN_NODES)
+    share = float(weights[nodes >= 1.0 + 1e-9].sum() / weights.sum())
+    tr.observe_coverage([_Cover(2.0, x_min=float(track.filter.x[0]) + sigma_x)])
+    tr.step(2.0, [])
+    assert track.unseen == pytest.approx(math.log1p(-0.9 * share), rel=1e-9)
+
+
+def test_a_camera_detection_restores_the_track_and_frames_out_of_view_say_nothing():
+    tr = _tracker_seen(0.9)
+    _one_track(tr)
+    track = tr.tracks[0]
+    for k in range(10):  # every other frame sees the car: never two misses in a row
+        t = 2.0 + 0.5 * k
+        tr.observe_coverage([_Cover(t)])
+        tr.step(t, [_det((100.0, 0.0), t, sensor="cam")] if k % 2 else [])
+        assert tr.tracks == [track]
+        assert track.unseen == (0.0 if k % 2 else pytest.approx(math.log(0.1)))
+    for k in range(10):  # frames that look elsewhere
+        t = 7.0 + 0.5 * k
+        tr.observe_coverage([_Cover(t, x_min=1000.0)])
+        tr.step(t, [])
+    assert tr.tracks == [track] and track.unseen == 0.0 and tr.dropped_unseen == 0
+
+
+def test_without_a_camera_detection_probability_coverage_is_ignored():
+    tr = _tracker_seen(0.0)
+    _one_track(tr)
+    for k in range(10):
+        t = 2.0 + 0.5 * k
+        tr.observe_coverage([_Cover(t)])
+        tr.step(t, [])
+    assert len(tr.tracks) == 1 and tr.tracks[0].unseen == 0.0
+
+
+@pytest.mark.parametrize("pd", [-0.1, 1.0])
+def test_a_camera_detection_probability_outside_0_1_is_refused(pd):
+    with pytest.raises(ValueError, match=r"camera_detection_probability must be in \[0, 1\)"):
+        MultiTrackerConfig(camera_detection_probability=pd)

@@ -22,6 +22,7 @@ there; None without either.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
@@ -47,11 +48,24 @@ from .track import Track
 
 if TYPE_CHECKING:
     from autonomy.estimation.tracker import TrackerConfig
+    from autonomy.sensing.coverage import FrameCoverage
 
-__all__ = ["UNRESOLVED_RADIUS_M", "MultiTargetTracker", "MultiTrackerConfig"]
+__all__ = ["UNRESOLVED_RADIUS_M", "UNSEEN_DROP", "UNSEEN_NODES", "MultiTargetTracker", "MultiTrackerConfig"]
 
 UNRESOLVED_RADIUS_M = 100.0
 """Two tracks farther apart than this (m) are never taken for unresolved (a bound before the χ² test)."""
+
+UNSEEN_DROP = 0.02
+"""A track is dropped once the likelihood of the cameras' misses since a camera last saw it, ``Π (1 − p_D v)``,
+falls below this (:meth:`MultiTargetTracker.observe_coverage`): with ``p_D`` = 0.9, two frames in a row that had
+the whole track in view; seven that had half of it."""
+_UNSEEN_DROP_LOG = math.log(UNSEEN_DROP)
+
+UNSEEN_NODES = 5
+"""Gauss–Hermite nodes per axis over which a track's visible share is averaged (25 points)."""
+_h, _hw = np.polynomial.hermite_e.hermegauss(UNSEEN_NODES)
+_HERMITE_POINTS = np.array([(a, b) for a in _h for b in _h])  # standard-normal nodes, (25, 2)
+_HERMITE_WEIGHTS = np.array([wa * wb for wa in _hw for wb in _hw]) / (2.0 * math.pi)  # sum 1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -76,6 +90,9 @@ class MultiTrackerConfig:
         Most live tracks (>= 1); no new track starts beyond it (counted in ``starts_refused``).
     class_aided : bool
         Whether detections' class readings weigh in their association (:mod:`.class_affinity`).
+    camera_detection_probability : float
+        Probability in [0, 1) that a camera detects a car it has in view (:meth:`MultiTargetTracker.observe_coverage`);
+        0 turns the cameras' negative information off.
     """
 
     associator: Literal["gnn", "jpda"] = "gnn"
@@ -87,6 +104,7 @@ class MultiTrackerConfig:
     merge_speed_mps: float = 2.0
     max_tracks: int = 500
     class_aided: bool = True
+    camera_detection_probability: float = 0.0
 
     def __post_init__(self) -> None:
         if self.associator not in ("gnn", "jpda"):
@@ -103,6 +121,9 @@ class MultiTrackerConfig:
         for name in ("clutter_density", "merge_distance_m", "merge_speed_mps"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"MultiTrackerConfig.{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0 <= self.camera_detection_probability < 1:
+            raise ValueError(f"MultiTrackerConfig.camera_detection_probability must be in [0, 1), got "
+                             f"{self.camera_detection_probability!r}")
         if self.max_tracks < 1:
             raise ValueError(f"MultiTrackerConfig.max_tracks must be >= 1, got {self.max_tracks!r}")
 
@@ -159,6 +180,7 @@ class MultiTargetTracker:
         self.confirmations = 0
         self.dropped_tentative = 0
         self.dropped_lost = 0
+        self.dropped_unseen = 0
         self.merges = 0
         self.gated_out = 0
         self.starts_refused = 0
@@ -170,6 +192,7 @@ class MultiTargetTracker:
         self._reports: tuple[tuple, list[TrackReport]] | None = None
         self._defer: tuple[int, float] | None = None  # (target track id, step time) of a consensus step
         self._deferred: list[MeasurementLike] = []
+        self._coverage: dict[tuple[float, object], FrameCoverage] = {}  # camera frames not yet processed
 
     # -- the estimator interface ---------------------------------------------------------------------------------
     def cue(self, t: float, p_W: np.ndarray, sigma_m: float) -> None:
@@ -177,14 +200,29 @@ class MultiTargetTracker:
         self._reports = None
         self.identity.cue(t, p_W, sigma_m)
 
+    def observe_coverage(self, coverages: Sequence[FrameCoverage]) -> None:
+        """Camera frames' coverage (:mod:`autonomy.sensing.coverage`), processed at the next :meth:`step` with the
+        frames' detections (an empty frame is a scan too): each confirmed track the frame did not update loses
+        ``log(1 − p_D v)`` of its ``unseen`` score, ``v`` the share of its position distribution the camera had in view
+        and ``p_D`` = ``camera_detection_probability``; a camera detection's update restores it to 0, and a track
+        whose score falls below ``log(UNSEEN_DROP)`` is dropped: the camera kept looking where it said a car was, and
+        saw none (module docstring). Ignored while ``camera_detection_probability`` is 0."""
+        if self.multi.camera_detection_probability <= 0:
+            return
+        for cov in coverages:
+            self._coverage[(float(cov.t_meas), cov.sensor_id)] = cov
+
     def step(self, t: float, detections: Sequence[MeasurementLike]) -> TargetEstimate | None:
         """Absorb ``detections`` (sorted by ``t_meas``) and return the target's estimate at ``t`` (s): its track's,
         or the search centre's while no track is the target (module docstring)."""
         self._reports = None
         self._step_detections = {}
-        for t_meas, scan in self._scans(detections):
+        for t_meas, scan, coverage in self._scans(detections, t):
             self._drop_lost(t_meas)
-            self._process_scan(t_meas, scan)
+            if scan:
+                self._process_scan(t_meas, scan)
+            if coverage is not None:
+                self._unseen(t_meas, scan, coverage)
         self._drop_lost(t)
         self._target = self.identity.target()
         if self.team_target is not None and self._track(self.team_target) is not None:
@@ -288,11 +326,19 @@ class MultiTargetTracker:
         return list(self._reports[1])
 
     # -- a scan --------------------------------------------------------------------------------------------------
-    def _scans(self, detections: Sequence[MeasurementLike]) -> list[tuple[float, list]]:
+    def _scans(self, detections: Sequence[MeasurementLike], t: float) -> list[tuple[float, list, object]]:
+        """The scans in time order (then sensor id): (time, detections, the frame's coverage or None), with the
+        camera frames observed by ``t`` (s) that brought no detection."""
         scans: dict[tuple[float, object], list] = {}
         for d in detections:
             scans.setdefault((d.t_meas, d.sensor_id), []).append(d)
-        return [(key[0], dets) for key, dets in sorted(scans.items(), key=lambda kv: (kv[0][0], str(kv[0][1])))]
+        coverage = {}
+        if self._coverage:
+            for key in [k for k in self._coverage if k[0] <= t + TIME_TOLERANCE]:
+                coverage[key] = self._coverage.pop(key)
+                scans.setdefault(key, [])
+        return [(key[0], dets, coverage.get(key))
+                for key, dets in sorted(scans.items(), key=lambda kv: (kv[0][0], str(kv[0][1])))]
 
     def _process_scan(self, t_meas: float, scan: Sequence[MeasurementLike]) -> None:
         live = [tr for tr in self.tracks if tr.filter.t <= t_meas]
@@ -340,6 +386,43 @@ class MultiTargetTracker:
             self._confirmations(live, hit, t_meas)
             self._initiate(fixes)
         self._merge()
+
+    def _unseen(self, t_meas: float, scan: Sequence[MeasurementLike], coverage: FrameCoverage) -> None:
+        """A camera frame at ``t_meas`` (s) with detections ``scan``: the confirmed tracks it updated are seen; every
+        other one it had in view loses ``log(1 − p_D v)`` (:meth:`observe_coverage`), ``v`` its visible share: the
+        :data:`UNSEEN_NODES` Gauss–Hermite nodes of its position distribution (moved on with its velocity to
+        ``t_meas``) weighted by their weights, each in view or not (:meth:`FrameCoverage.visible` at the target
+        height)."""
+        taken = {id(d) for d in scan}
+        seen = {tr.track_id for tr in self.tracks
+                if any(id(d) in taken for d in self._step_detections.get(tr.track_id, ()))}
+        rest = []
+        for tr in self.tracks:
+            if tr.track_id in seen:
+                tr.unseen = 0.0
+            elif tr.confirmed and tr.filter.t <= t_meas + TIME_TOLERANCE:
+                rest.append(tr)
+        if not rest:
+            return
+        x = np.array([tr.filter.x for tr in rest])
+        dt = t_meas - np.array([tr.filter.t for tr in rest])
+        mean = x[:, self._ix] + dt[:, None] * x[:, self._iv]
+        ix = np.ix_(self._ix, self._ix)
+        L = np.linalg.cholesky(np.array([tr.filter.P[ix] for tr in rest]) + 1e-9 * np.eye(2))
+        pts = mean[:, None, :] + np.einsum("nij,kj->nki", L, _HERMITE_POINTS)
+        ground = np.concatenate([pts.reshape(-1, 2), np.full((pts.shape[0] * pts.shape[1], 1),
+                                                             self.config.target_height)], axis=1)
+        shown = coverage.visible(ground).reshape(pts.shape[:2])
+        share = shown @ _HERMITE_WEIGHTS
+        pd = self.multi.camera_detection_probability
+        for tr, v in zip(rest, share.tolist(), strict=True):
+            if v <= 0.0:
+                continue
+            tr.unseen += math.log1p(-pd * min(v, 1.0))
+            if tr.unseen < _UNSEEN_DROP_LOG:
+                self.tracks.remove(tr)
+                self.dropped_unseen += 1
+                self.identity.deleted(tr.track_id, *self._where(tr))
 
     def _unresolved(self, live: Sequence[Track]) -> list[tuple[int, int]]:
         """Pairs of ids of confirmed tracks the identity belief holds whose estimates' difference lies inside the

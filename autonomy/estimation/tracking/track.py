@@ -44,6 +44,9 @@ class Track:
         track (:func:`~.identity.track_evidence`).
     class_loglik : dict[str, np.ndarray]
         Per attribute, the log-likelihood of those readings for every class.
+    unseen : float
+        Log-likelihood of the cameras' misses since a camera last updated the track (0 when it just did; see
+        :meth:`~.multi.MultiTargetTracker.observe_coverage`).
     recent : OrderedDict[tuple, int]
         The last :data:`RECENT_SCANS` scans that updated the track, ``(sensor id, time) → id`` of the detection it
         took: two tracks updated by different detections of one scan are two cars (a sensor reports a car once per
@@ -61,6 +64,7 @@ class Track:
         self.confirmed = bool(confirmed)
         self.evidence = 0.0
         self.class_loglik: dict = {}
+        self.unseen = 0.0
         self.recent: OrderedDict = OrderedDict()
 
     def took(self, sensor_id: object, t_meas: float, detection: object) -> None:

@@ -343,3 +343,29 @@ def test_without_a_camera_detection_probability_coverage_is_ignored():
 def test_a_camera_detection_probability_outside_0_1_is_refused(pd):
     with pytest.raises(ValueError, match=r"camera_detection_probability must be in \[0, 1\)"):
         MultiTrackerConfig(camera_detection_probability=pd)
+
+
+def test_the_agent_hands_arrived_coverage_to_an_estimator_that_observes_it():
+    """Coverage reaches the estimator at the first step at or after its arrival, through a gated user estimator
+    too; an estimator without ``observe_coverage`` never sees it."""
+    from autonomy.agent import Agent
+
+    class Plain:
+        def step(self, t, detections):
+            return None
+
+    tracker = _tracker_seen(0.9)
+    for est in (tracker, TargetGatedEstimator(Plain(), tracker), Plain()):
+        agent = Agent("uav1", est, guidance=None)
+        early, late = _Cover(1.0), _Cover(2.0)
+        late.t_arrival = 2.5
+        agent.receive_coverage(early)
+        agent.receive_coverage(late)
+        agent.take_ready(2.0)
+        if est is not tracker and not isinstance(est, TargetGatedEstimator):
+            continue
+        assert list(tracker._coverage) == [(1.0, "cam")]
+        agent.take_ready(2.5)
+        assert list(tracker._coverage) == [(1.0, "cam"), (2.0, "cam")]
+        tracker._coverage.clear()
+    assert not tracker._coverage  # the plain estimator's agent kept its coverage to itself

@@ -57,3 +57,7 @@ class TargetGatedEstimator:
     def cue(self, t: float, p_W: Any, sigma_m: float) -> None:
         """The hand-off, to the tracker."""
         self.tracker.cue(t, p_W, sigma_m)
+
+    def observe_coverage(self, coverages: Sequence[Any]) -> None:
+        """Camera frames' coverage, to the tracker (:meth:`MultiTargetTracker.observe_coverage`)."""
+        self.tracker.observe_coverage(coverages)

@@ -13,7 +13,8 @@ from scipy.stats import binom
 from autonomy.estimation.tracker import TrackerConfig
 from autonomy.estimation.tracking.gated import TargetGatedEstimator
 from autonomy.estimation.tracking.identity import IdentityConfig
-from autonomy.estimation.tracking.multi import UNSEEN_DROP, UNSEEN_NODES, MultiTargetTracker, MultiTrackerConfig
+from autonomy.estimation.tracking.multi import (CAMERA_RESOLUTION_M, UNSEEN_DROP, UNSEEN_NODES, MultiTargetTracker,
+                                               MultiTrackerConfig)
 from autonomy.sensing.measurement import ClassMeasurement, Detection
 
 SIGMA = 2.0  # m, position detections
@@ -369,3 +370,18 @@ def test_the_agent_hands_arrived_coverage_to_an_estimator_that_observes_it():
         assert list(tracker._coverage) == [(1.0, "cam"), (2.0, "cam")]
         tracker._coverage.clear()
     assert not tracker._coverage  # the plain estimator's agent kept its coverage to itself
+
+
+def test_two_tracks_within_the_camera_s_resolution_are_not_judged_by_a_miss():
+    """Two cars 6 m apart (one blob to a camera that far): a frame that updates one of them, or neither, lowers
+    neither's score; 30 m apart, the missed one loses log(1 − p_D)."""
+    for gap, judged in ((6.0, False), (30.0, True)):
+        tr = _tracker_seen(0.9)
+        for k in range(4):
+            tr.step(0.5 * k, [_det((100.0, 0.0), 0.5 * k), _det((100.0, gap), 0.5 * k)])
+        assert len(tr.tracks) == 2 and all(x.confirmed for x in tr.tracks)
+        tr.observe_coverage([_Cover(2.0)])
+        tr.step(2.0, [_det((100.0, 0.0), 2.0, sensor="cam")])
+        far = max(tr.tracks, key=lambda x: x.filter.x[2])
+        assert far.unseen == (pytest.approx(math.log(0.1)) if judged else 0.0)
+        assert gap < CAMERA_RESOLUTION_M or judged

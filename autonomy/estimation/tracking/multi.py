@@ -50,7 +50,8 @@ if TYPE_CHECKING:
     from autonomy.estimation.tracker import TrackerConfig
     from autonomy.sensing.coverage import FrameCoverage
 
-__all__ = ["UNRESOLVED_RADIUS_M", "UNSEEN_DROP", "UNSEEN_NODES", "MultiTargetTracker", "MultiTrackerConfig"]
+__all__ = ["CAMERA_RESOLUTION_M", "UNRESOLVED_RADIUS_M", "UNSEEN_DROP", "UNSEEN_NODES", "MultiTargetTracker",
+           "MultiTrackerConfig"]
 
 UNRESOLVED_RADIUS_M = 100.0
 """Two tracks farther apart than this (m) are never taken for unresolved (a bound before the χ² test)."""
@@ -60,6 +61,10 @@ UNSEEN_DROP = 0.02
 falls below this (:meth:`MultiTargetTracker.observe_coverage`): with ``p_D`` = 0.9, two frames in a row that had
 the whole track in view; seven that had half of it."""
 _UNSEEN_DROP_LOG = math.log(UNSEEN_DROP)
+
+CAMERA_RESOLUTION_M = 10.0
+"""m: a track with another track this near is not judged by a frame that missed it: two cars this close may show as
+one blob (the detector reports touching blobs as one car), taken by the other track."""
 
 UNSEEN_NODES = 5
 """Gauss–Hermite nodes per axis over which a track's visible share is averaged (25 points)."""
@@ -202,8 +207,9 @@ class MultiTargetTracker:
 
     def observe_coverage(self, coverages: Sequence[FrameCoverage]) -> None:
         """Camera frames' coverage (:mod:`autonomy.sensing.coverage`), processed at the next :meth:`step` with the
-        frames' detections (an empty frame is a scan too): each confirmed track the frame did not update loses
-        ``log(1 − p_D v)`` of its ``unseen`` score, ``v`` the share of its position distribution the camera had in view
+        frames' detections (an empty frame is a scan too): each confirmed track the frame did not update (and with
+        no other track within :data:`CAMERA_RESOLUTION_M`, whose blob it may have shared) loses ``log(1 − p_D v)``
+        of its ``unseen`` score, ``v`` the share of its position distribution the camera had in view
         and ``p_D`` = ``camera_detection_probability``; a camera detection's update restores it to 0, and a track
         whose score falls below ``log(UNSEEN_DROP)`` is dropped: the camera kept looking where it said a car was, and
         saw none (module docstring). Ignored while ``camera_detection_probability`` is 0."""
@@ -389,7 +395,8 @@ class MultiTargetTracker:
 
     def _unseen(self, t_meas: float, scan: Sequence[MeasurementLike], coverage: FrameCoverage) -> None:
         """A camera frame at ``t_meas`` (s) with detections ``scan``: the confirmed tracks it updated are seen; every
-        other one it had in view loses ``log(1 − p_D v)`` (:meth:`observe_coverage`), ``v`` its visible share: the
+        other one with no other track within :data:`CAMERA_RESOLUTION_M` that it had in view loses
+        ``log(1 − p_D v)`` (:meth:`observe_coverage`), ``v`` its visible share: the
         :data:`UNSEEN_NODES` Gauss–Hermite nodes of its position distribution (moved on with its velocity to
         ``t_meas``) weighted by their weights, each in view or not (:meth:`FrameCoverage.visible` at the target
         height)."""
@@ -404,9 +411,16 @@ class MultiTargetTracker:
                 rest.append(tr)
         if not rest:
             return
+        everyone = np.array([tr.filter.x[self._ix] + (t_meas - tr.filter.t) * tr.filter.x[self._iv]
+                             for tr in self.tracks])
         x = np.array([tr.filter.x for tr in rest])
         dt = t_meas - np.array([tr.filter.t for tr in rest])
         mean = x[:, self._ix] + dt[:, None] * x[:, self._iv]
+        crowded = np.array([len(n) > 1 for n in cKDTree(everyone).query_ball_point(mean, CAMERA_RESOLUTION_M)])
+        if crowded.all():
+            return
+        rest = [tr for tr, c in zip(rest, crowded.tolist(), strict=True) if not c]
+        x, dt, mean = x[~crowded], dt[~crowded], mean[~crowded]
         ix = np.ix_(self._ix, self._ix)
         L = np.linalg.cholesky(np.array([tr.filter.P[ix] for tr in rest]) + 1e-9 * np.eye(2))
         pts = mean[:, None, :] + np.einsum("nij,kj->nki", L, _HERMITE_POINTS)

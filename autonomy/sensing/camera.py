@@ -11,6 +11,9 @@ simulator uses this constant when it builds car bodies. The detector works on th
    ``J = d(az, el)/d(u, v)``: the second term accounts for the blob centroid not being the projection of the
    target's reference point (partial views, pixelation) and keeps ``R`` positive definite; it is not simulated.
 
+Every frame also hands out its coverage (``SensorOutput.extras["coverage"]``, :mod:`.coverage`: where the frame could
+have seen a car), for the trackers' negative information.
+
 The reported pixel box is the blob's box shifted by the same centroid noise. The segmentation mask is used only to
 tell the recorder which target a blob came from (``TargetTruth.seg_ids``; without them, by projecting the targets).
 Two cars whose blobs touch in the image give one detection.

@@ -13,8 +13,8 @@ from scipy.stats import binom
 from autonomy.estimation.tracker import TrackerConfig
 from autonomy.estimation.tracking.gated import TargetGatedEstimator
 from autonomy.estimation.tracking.identity import IdentityConfig
-from autonomy.estimation.tracking.multi import (CAMERA_RESOLUTION_M, UNSEEN_DROP, UNSEEN_NODES, MultiTargetTracker,
-                                               MultiTrackerConfig)
+from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerConfig
+from autonomy.estimation.tracking.unseen import CAMERA_RESOLUTION_M, UNSEEN_DROP, UNSEEN_NODES
 from autonomy.sensing.measurement import ClassMeasurement, Detection
 
 SIGMA = 2.0  # m, position detections

@@ -13,7 +13,10 @@ Per scan (the detections of one sensor taken at one time; filters predict to the
 4. the position fixes that no track took start tentative tracks in pairs with earlier ones (:mod:`.pairing`);
 5. two confirmed tracks on one car (closer than ``merge_distance_m`` and ``merge_speed_mps``) become one: the older
    stays, with the other's identity weight; two tracks that one of their last scans updated with different
-   detections are two cars (two cars stopped side by side at a junction) and stay apart.
+   detections are two cars (two cars stopped side by side at a junction) and stay apart;
+6. a camera frame (with ``camera_detection_probability`` > 0, even one that detected nothing) lowers the ``unseen``
+   score of each confirmed track it had in view and did not update, and drops a track the cameras keep missing
+   (:meth:`MultiTargetTracker.observe_coverage`, :mod:`.unseen`).
 
 :meth:`MultiTargetTracker.step` returns the estimate of the track believed to be the target, or, while no track is,
 where the target is believed to be (the cue, or the lost target track's estimate grown with time) so guidance searches
@@ -45,32 +48,16 @@ from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
 from .track import Track
+from .unseen import CAMERA_RESOLUTION_M, UNSEEN_DROP_LOG, visible_share
 
 if TYPE_CHECKING:
     from autonomy.estimation.tracker import TrackerConfig
     from autonomy.sensing.coverage import FrameCoverage
 
-__all__ = ["CAMERA_RESOLUTION_M", "UNRESOLVED_RADIUS_M", "UNSEEN_DROP", "UNSEEN_NODES", "MultiTargetTracker",
-           "MultiTrackerConfig"]
+__all__ = ["UNRESOLVED_RADIUS_M", "MultiTargetTracker", "MultiTrackerConfig"]
 
 UNRESOLVED_RADIUS_M = 100.0
 """Two tracks farther apart than this (m) are never taken for unresolved (a bound before the χ² test)."""
-
-UNSEEN_DROP = 0.02
-"""A track is dropped once the likelihood of the cameras' misses since a camera last saw it, ``Π (1 − p_D v)``,
-falls below this (:meth:`MultiTargetTracker.observe_coverage`): with ``p_D`` = 0.9, two frames in a row that had
-the whole track in view; seven that had half of it."""
-_UNSEEN_DROP_LOG = math.log(UNSEEN_DROP)
-
-CAMERA_RESOLUTION_M = 10.0
-"""m: a track with another track this near is not judged by a frame that missed it: two cars this close may show as
-one blob (the detector reports touching blobs as one car), taken by the other track."""
-
-UNSEEN_NODES = 5
-"""Gauss–Hermite nodes per axis over which a track's visible share is averaged (25 points)."""
-_h, _hw = np.polynomial.hermite_e.hermegauss(UNSEEN_NODES)
-_HERMITE_POINTS = np.array([(a, b) for a in _h for b in _h])  # standard-normal nodes, (25, 2)
-_HERMITE_WEIGHTS = np.array([wa * wb for wa in _hw for wb in _hw]) / (2.0 * math.pi)  # sum 1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -208,11 +195,11 @@ class MultiTargetTracker:
     def observe_coverage(self, coverages: Sequence[FrameCoverage]) -> None:
         """Camera frames' coverage (:mod:`autonomy.sensing.coverage`), processed at the next :meth:`step` with the
         frames' detections (an empty frame is a scan too): each confirmed track the frame did not update (and with
-        no other track within :data:`CAMERA_RESOLUTION_M`, whose blob it may have shared) loses ``log(1 − p_D v)``
-        of its ``unseen`` score, ``v`` the share of its position distribution the camera had in view
-        and ``p_D`` = ``camera_detection_probability``; a camera detection's update restores it to 0, and a track
-        whose score falls below ``log(UNSEEN_DROP)`` is dropped: the camera kept looking where it said a car was, and
-        saw none (module docstring). Ignored while ``camera_detection_probability`` is 0."""
+        no other track within :data:`.unseen.CAMERA_RESOLUTION_M`, whose blob it may have shared) loses
+        ``log(1 − p_D v)`` of its ``unseen`` score, ``v`` the share of its position distribution the camera had in
+        view and ``p_D`` = ``camera_detection_probability``; a camera detection's update restores it to 0, and a
+        track whose score falls below ``log(.unseen.UNSEEN_DROP)`` is dropped: the camera kept looking where it said
+        a car was, and saw none. Ignored while ``camera_detection_probability`` is 0."""
         if self.multi.camera_detection_probability <= 0:
             return
         for cov in coverages:
@@ -395,11 +382,9 @@ class MultiTargetTracker:
 
     def _unseen(self, t_meas: float, scan: Sequence[MeasurementLike], coverage: FrameCoverage) -> None:
         """A camera frame at ``t_meas`` (s) with detections ``scan``: the confirmed tracks it updated are seen; every
-        other one with no other track within :data:`CAMERA_RESOLUTION_M` that it had in view loses
-        ``log(1 − p_D v)`` (:meth:`observe_coverage`), ``v`` its visible share: the
-        :data:`UNSEEN_NODES` Gauss–Hermite nodes of its position distribution (moved on with its velocity to
-        ``t_meas``) weighted by their weights, each in view or not (:meth:`FrameCoverage.visible` at the target
-        height)."""
+        other one with no other track within :data:`.unseen.CAMERA_RESOLUTION_M` that it had in view loses
+        ``log(1 − p_D v)`` (:meth:`observe_coverage`), ``v`` its visible share (:func:`.unseen.visible_share`) of
+        its position distribution moved on with its velocity to ``t_meas``."""
         taken = {id(d) for d in scan}
         seen = {tr.track_id for tr in self.tracks
                 if any(id(d) in taken for d in self._step_detections.get(tr.track_id, ()))}
@@ -411,29 +396,22 @@ class MultiTargetTracker:
                 rest.append(tr)
         if not rest:
             return
-        everyone = np.array([tr.filter.x[self._ix] + (t_meas - tr.filter.t) * tr.filter.x[self._iv]
-                             for tr in self.tracks])
-        x = np.array([tr.filter.x for tr in rest])
-        dt = t_meas - np.array([tr.filter.t for tr in rest])
-        mean = x[:, self._ix] + dt[:, None] * x[:, self._iv]
-        crowded = np.array([len(n) > 1 for n in cKDTree(everyone).query_ball_point(mean, CAMERA_RESOLUTION_M)])
-        if crowded.all():
+        at = {id(tr): tr.filter.x[self._ix] + (t_meas - tr.filter.t) * tr.filter.x[self._iv] for tr in self.tracks}
+        mean = np.array([at[id(tr)] for tr in rest])
+        near = cKDTree(np.array(list(at.values()))).query_ball_point(mean, CAMERA_RESOLUTION_M)
+        alone = np.array([len(n) == 1 for n in near])  # the track itself only
+        if not alone.any():
             return
-        rest = [tr for tr, c in zip(rest, crowded.tolist(), strict=True) if not c]
-        x, dt, mean = x[~crowded], dt[~crowded], mean[~crowded]
+        rest = [tr for tr, a in zip(rest, alone.tolist(), strict=True) if a]
         ix = np.ix_(self._ix, self._ix)
-        L = np.linalg.cholesky(np.array([tr.filter.P[ix] for tr in rest]) + 1e-9 * np.eye(2))
-        pts = mean[:, None, :] + np.einsum("nij,kj->nki", L, _HERMITE_POINTS)
-        ground = np.concatenate([pts.reshape(-1, 2), np.full((pts.shape[0] * pts.shape[1], 1),
-                                                             self.config.target_height)], axis=1)
-        shown = coverage.visible(ground).reshape(pts.shape[:2])
-        share = shown @ _HERMITE_WEIGHTS
+        share = visible_share(mean[alone], np.array([tr.filter.P[ix] for tr in rest]), coverage,
+                              self.config.target_height)
         pd = self.multi.camera_detection_probability
         for tr, v in zip(rest, share.tolist(), strict=True):
             if v <= 0.0:
                 continue
             tr.unseen += math.log1p(-pd * min(v, 1.0))
-            if tr.unseen < _UNSEEN_DROP_LOG:
+            if tr.unseen < UNSEEN_DROP_LOG:
                 self.tracks.remove(tr)
                 self.dropped_unseen += 1
                 self.identity.deleted(tr.track_id, *self._where(tr))

@@ -112,7 +112,9 @@ class Agent:
         return self.act(t, own, teammates, self.estimator.step(t, ready), len(ready), shared)
 
     def take_ready(self, t: float) -> list[Detection]:
-        """Detections that have arrived by ``t`` (s), in the order they were taken; they leave the queue.
+        """Detections that have arrived by ``t`` (s), in the order they were taken; they leave the queue. The camera
+        coverage that has arrived by ``t`` leaves its queue too, handed to the estimator's ``observe_coverage`` if it
+        has one (so it is processed with the detections of the same step).
 
         For a step whose estimation runs outside the agent (a consensus team): pass the estimate to :meth:`act`.
         """

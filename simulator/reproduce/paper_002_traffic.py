@@ -10,7 +10,8 @@ by seed (run ``i`` of every campaign has the same seed, so the same town, routes
 - ``same_look``: every car a red sedan, so no class reading tells the target apart: what identity remains from the
   cue and track continuity alone;
 - Table II's columns among traffic (``radar_ekf``, ``radar_ukf``, ``radar_maekf``, ``radar_ecukf``): the paper's
-  radar-only team (cameras removed), beside the same columns without traffic (``road_standoff``, single-target).
+  radar-only team (cameras removed; ``road_standoff``'s start and altitudes, where the shipped traffic world flies
+  higher for its cameras), beside the same columns without traffic (``road_standoff``, single-target).
 
 Verdict rules (the issue's acceptance, each as strict as stated): the fused position error and the NMPC standoff
 error with traffic are within 1.5× of ``alone``: the upper end of the 95 % interval of the per-seed ratio is at most
@@ -72,7 +73,9 @@ def _world_overrides(kind: str) -> tuple[str, ...]:
             radars = [s.model_dump(exclude_defaults=True) for s in u.sensors if s.type == "radar"]
             params = paper.uavs[i].autonomy.estimator.params
             sets += [f"uavs[{i}].sensors={_flow(radars)}", f"uavs[{i}].autonomy.estimator.type={est}",
-                     f"uavs[{i}].autonomy.estimator.params={_flow(params)}"]
+                     f"uavs[{i}].autonomy.estimator.params={_flow(params)}",
+                     f"uavs[{i}].initial={_flow(paper.uavs[i].initial.model_dump(mode='json'))}",
+                     f"uavs[{i}].autonomy.guidance.altitude={paper.uavs[i].autonomy.guidance.altitude}"]
         return tuple(sets)
     raise ValueError(f"unknown traffic campaign {kind!r}")
 

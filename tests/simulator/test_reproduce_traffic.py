@@ -40,7 +40,11 @@ def test_campaign_overrides_load_and_do_what_they_say():
     same = load_world("road_standoff_traffic", _world_overrides("same_look")).world
     assert {(g.colour, g.type) for g in same.ground_vehicles} == {("red", "sedan")}
     radar = load_world("road_standoff_traffic", _world_overrides("radar_ecukf")).world
-    for u, s in zip(radar.uavs, shipped.uavs, strict=True):
+    paper = load_world("road_standoff").world
+    for u, s, b in zip(radar.uavs, shipped.uavs, paper.uavs, strict=True):
         assert [x.type for x in u.sensors] == ["radar"] and u.sensors[0] == s.sensors[0]
         assert u.autonomy.estimator.type == "ecukf"
+        # the paper's team flies road_standoff's start and altitude, not the traffic world's higher ones
+        assert u.initial == b.initial and u.autonomy.guidance.altitude == b.autonomy.guidance.altitude
+        assert s.autonomy.guidance.altitude > b.autonomy.guidance.altitude
     assert len(radar.ground_vehicles) == len(shipped.ground_vehicles)

@@ -221,8 +221,16 @@ class RadarDetectionModel(DetectionModel):
         return RadarModel(layout, meas.p_sensor_W, self.dim, getattr(meas, "v_sensor_W", None), target_height)
 
     def ground_fix(self, meas: MeasurementLike, target_height: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Range and azimuth to a point on the plane ``z = target_height``; first-order covariance: the range error
-        along the line of sight (scaled by ``r/ρ``), the azimuth error across it."""
+        """Range and azimuth to a point on the plane ``z = target_height``: the ground range ``ρ = √(r² − Δz²)``
+        (0 where ``r ≤ |Δz|``) along the azimuth.
+
+        Its covariance, away from the nadir (the range one standard deviation short, ``r − σ_r``, still reaches the
+        plane), is first-order: the range error along the line of sight scaled by ``r/ρ``, the azimuth error across
+        it. Nearer the nadir ``ρ`` is no function of ``r`` a tangent describes (it stops at 0, and ``r/ρ`` grows
+        without bound), and the first-order covariance is far too small (at the nadir, no spread across the
+        azimuth at all). There the ground range's standard deviation is the larger one-sided change of ``ρ`` over
+        ``r ± σ_r`` (``ρ`` clipped at 0; a range short of the plane counts as reaching it), and the azimuth error acts on the true ground range, anywhere in that
+        spread: variance ``(ρ² + σ_ρ²) σ_az²`` across (range and azimuth errors taken independent)."""
         z = np.asarray(meas.z, dtype=float)
         R = np.asarray(meas.R, dtype=float)
         p_s = np.asarray(meas.p_sensor_W, dtype=float)
@@ -230,7 +238,16 @@ class RadarDetectionModel(DetectionModel):
         dz = target_height - p_s[2]
         rho2 = rng * rng - dz * dz
         rho = np.sqrt(rho2) if rho2 > 0 else 0.0
-        xy = p_s[:2] + rho * np.array([np.cos(az), np.sin(az)])
+        u = np.array([np.cos(az), np.sin(az)])
+        xy = p_s[:2] + rho * u
+        sigma_r = float(np.sqrt(max(R[0, 0], 0.0)))
+        if rng - sigma_r <= abs(dz):  # near the nadir (docstring)
+            def ground(r: float) -> float:
+                return float(np.sqrt(max(r * r - dz * dz, 0.0)))
+
+            s_rho = max(ground(max(rng, abs(dz)) + sigma_r) - rho, rho - ground(rng - sigma_r))
+            n = np.array([-u[1], u[0]])
+            return xy, s_rho**2 * np.outer(u, u) + (rho * rho + s_rho**2) * R[1, 1] * np.outer(n, n)
         along = (rng / rho) if rho > 1e-6 else 1.0
         J = np.array([[np.cos(az) * along, -rho * np.sin(az)], [np.sin(az) * along, rho * np.cos(az)]])
         P = J @ R[:2, :2] @ J.T

@@ -229,8 +229,9 @@ class RadarDetectionModel(DetectionModel):
         it. Nearer the nadir ``ρ`` is no function of ``r`` a tangent describes (it stops at 0, and ``r/ρ`` grows
         without bound), and the first-order covariance is far too small (at the nadir, no spread across the
         azimuth at all). There the ground range's standard deviation is the larger one-sided change of ``ρ`` over
-        ``r ± σ_r`` (``ρ`` clipped at 0; a range short of the plane counts as reaching it), and the azimuth error acts on the true ground range, anywhere in that
-        spread: variance ``(ρ² + σ_ρ²) σ_az²`` across (range and azimuth errors taken independent)."""
+        ``r ± σ_r`` (``ρ`` clipped at 0; a range short of the plane counts as reaching it), and the azimuth error
+        acts on the true ground range, anywhere in that spread: variance ``(ρ² + σ_ρ²) σ_az²`` across (range and
+        azimuth errors taken independent)."""
         z = np.asarray(meas.z, dtype=float)
         R = np.asarray(meas.R, dtype=float)
         p_s = np.asarray(meas.p_sensor_W, dtype=float)

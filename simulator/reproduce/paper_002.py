@@ -222,7 +222,9 @@ def _deviations(runs: int, n_town: int, n_traffic: int) -> tuple[str, ...]:
         "Estimation-only replays: synthetic radars at the paper's 500 m and 40 m/s; car of up to 12 m/s with a "
         "scripted stop-and-go schedule on seeded curved roads (one per evaluation seed).",
         f"With traffic (our extension, {n_traffic} paired seeds): `road_standoff_traffic`; the paper assumes the "
-        "target is given. Its shipped UAVs add a gimballed camera each; Table II's columns among traffic remove it.",
+        "target is given. Its shipped UAVs add a gimballed camera each and fly at 110 m and 120 m (road_standoff: 60 m "
+        "and 70 m) for the cameras' view down the streets; Table II's columns among traffic remove the cameras and fly "
+        "road_standoff's altitudes.",
         f"Run count: the paper uses 100 Monte Carlo runs; the paper's world here {runs} (its columns and ours on it), "
         f"our extensions fewer: the town world {n_town}, traffic {n_traffic} paired seeds (a run index costs ≈ 90 s "
         "and ≈ 640 s of CPU there against ≈ 120 s for every column of the paper's world; no verdict on the paper's "

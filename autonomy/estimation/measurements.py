@@ -237,15 +237,15 @@ class RadarDetectionModel(DetectionModel):
         p_s = np.asarray(meas.p_sensor_W, dtype=float)
         rng, az = z[0], z[1]
         dz = target_height - p_s[2]
-        rho2 = rng * rng - dz * dz
-        rho = np.sqrt(rho2) if rho2 > 0 else 0.0
+
+        def ground(r: float) -> float:  # the ground range of slant range r
+            return float(np.sqrt(max(r * r - dz * dz, 0.0)))
+
+        rho = ground(rng)
         u = np.array([np.cos(az), np.sin(az)])
         xy = p_s[:2] + rho * u
         sigma_r = float(np.sqrt(max(R[0, 0], 0.0)))
         if rng - sigma_r <= abs(dz):  # near the nadir (docstring)
-            def ground(r: float) -> float:
-                return float(np.sqrt(max(r * r - dz * dz, 0.0)))
-
             s_rho = max(ground(max(rng, abs(dz)) + sigma_r) - rho, rho - ground(rng - sigma_r))
             n = np.array([-u[1], u[0]])
             return xy, s_rho**2 * np.outer(u, u) + (rho * rho + s_rho**2) * R[1, 1] * np.outer(n, n)

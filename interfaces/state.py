@@ -112,6 +112,34 @@ class TargetEstimate:
             object.__setattr__(est, name, value)
         return est
 
+    @classmethod
+    def rows_of(cls, t: list[float], p_W: np.ndarray, v_W: np.ndarray, P: np.ndarray) -> list[TargetEstimate]:
+        """One estimate per row of float64 arrays the caller hands over: ``t`` (N,) times, ``p_W`` and ``v_W``
+        (N, n), ``P`` (N, 2n, 2n); each estimate holds read-only views of its rows (the arrays are made read-only,
+        not copied: pass fresh ones). The same estimates as :meth:`of_arrays` of each row, the arrays checked once
+        for all rows (a tracker reporting hundreds of tracks at every step); anything that check does not pass goes
+        through :meth:`of_arrays` row by row, with its errors."""
+        m = len(t)
+        plain = (p_W.ndim == 2 and p_W.shape[0] == m and p_W.shape[1] in (2, 3) and v_W.shape == p_W.shape
+                 and P.shape == (m, 2 * p_W.shape[1], 2 * p_W.shape[1]) and p_W.dtype == np.float64
+                 and v_W.dtype == np.float64 and P.dtype == np.float64
+                 and all(isinstance(x, float) and math.isfinite(x) for x in t)
+                 and bool(np.isfinite(p_W).all()) and bool(np.isfinite(v_W).all()) and bool(np.isfinite(P).all()))
+        if not plain:
+            return [cls.of_arrays(t[k], p_W[k], v_W[k], P[k]) for k in range(m)]
+        for arr in (p_W, v_W, P):
+            arr.setflags(write=False)  # and so every row view of it
+        out = []
+        setattr_, new = object.__setattr__, object.__new__
+        for k in range(m):
+            est = new(cls)
+            setattr_(est, "t", float(t[k]))
+            setattr_(est, "p_W", p_W[k])
+            setattr_(est, "v_W", v_W[k])
+            setattr_(est, "P", P[k])
+            out.append(est)
+        return out
+
     def predict_xy(self, t: np.ndarray | float) -> np.ndarray:
         """Constant-velocity prediction of the horizontal position, p(t) = p + v (t − t_est) (m); shape (..., 2)."""
         dt = np.asarray(t, dtype=float) - self.t

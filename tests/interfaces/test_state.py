@@ -79,3 +79,28 @@ def test_estimate_of_arrays_refuses_what_the_constructor_refuses(p, v, P, match)
 def test_estimate_of_arrays_converts_other_arrays_as_the_constructor_does():
     made = TargetEstimate.of_arrays(1, np.array([1, 2]), np.array([0, 0], dtype=np.float32), None)
     assert made.t == 1.0 and made.p_W.dtype == np.float64 and made.v_W.dtype == np.float64
+
+
+def test_estimate_rows_of_equals_of_arrays_row_by_row_with_read_only_views():
+    rng = np.random.default_rng(3)
+    t, p, v = [0.5, 1.0, np.float64(2.0)], rng.normal(size=(3, 2)), rng.normal(size=(3, 2))
+    P = rng.normal(size=(3, 4, 4))
+    made = TargetEstimate.rows_of(t, p, v, P)
+    for k, est in enumerate(made):
+        ref = TargetEstimate.of_arrays(float(t[k]), p[k].copy(), v[k].copy(), P[k].copy())
+        assert est.t == ref.t and type(est.t) is float
+        for a, b in ((est.p_W, ref.p_W), (est.v_W, ref.v_W), (est.P, ref.P)):
+            assert a.shape == b.shape and np.array_equal(a, b) and not a.flags.writeable
+        with pytest.raises(ValueError):
+            est.p_W[0] = 1.0
+    assert np.shares_memory(made[1].P, P)  # handed over, not copied
+
+
+@pytest.mark.parametrize("row", [0, 2])
+def test_estimate_rows_of_refuses_a_bad_row_as_of_arrays_does(row):
+    p, v, P = np.zeros((3, 2)), np.zeros((3, 2)), np.tile(np.eye(4), (3, 1, 1))
+    p[row, 1] = np.nan
+    with pytest.raises(ValueError, match="p_W"):
+        TargetEstimate.rows_of([0.0, 1.0, 2.0], p, v, P)
+    with pytest.raises(ValueError, match="t"):
+        TargetEstimate.rows_of([0.0, float("inf"), 2.0], np.zeros((3, 2)), v, P)

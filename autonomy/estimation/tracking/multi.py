@@ -313,9 +313,10 @@ class MultiTargetTracker:
         key = tuple((tr.track_id, tr.filter.t) for tr in self.tracks)
         if self._reports is None or self._reports[0] != key:
             self._reports = (key, [TrackReport(
-                track_id=tr.track_id, estimate=self._estimate(tr),
+                track_id=tr.track_id, estimate=est,
                 target_probability=min(1.0, max(0.0, self.identity.probability(tr.track_id))),
-                evidence=tr.evidence, confirmed=tr.confirmed) for tr in self.tracks])
+                evidence=tr.evidence, confirmed=tr.confirmed)
+                for tr, est in zip(self.tracks, self._estimates(self.tracks), strict=True)])
         return list(self._reports[1])
 
     # -- a scan --------------------------------------------------------------------------------------------------
@@ -419,16 +420,19 @@ class MultiTargetTracker:
     def _unresolved(self, live: Sequence[Track]) -> list[tuple[int, int]]:
         """Pairs of ids of confirmed tracks the identity belief holds whose estimates' difference lies inside the
         99 % χ² gate of their summed position covariances (within ``UNRESOLVED_RADIUS_M`` first)."""
-        held = [tr for tr in live if tr.confirmed and self.identity.holds(tr.track_id)]
+        holds = self.identity.holds
+        held = [tr for tr in live if tr.confirmed and holds(tr.track_id)]
         if len(held) < 2:
             return []
-        p = np.array([tr.filter.x[self._ix] for tr in held])
+        p = self._xy(held)
         pairs = cKDTree(p).query_pairs(UNRESOLVED_RADIUS_M, output_type="ndarray")
         if not len(pairs):
             return []
-        ix = np.ix_(self._ix, self._ix)
-        P = np.array([tr.filter.P[ix] for tr in held])
         a, b = pairs[:, 0], pairs[:, 1]
+        both = np.unique(pairs)  # the covariances of the tracks in a pair only
+        P = np.zeros((len(held), 2, 2))
+        ix = np.ix_(self._ix, self._ix)
+        P[both] = [held[k].filter.P[ix] for k in both.tolist()]
         d, S = p[a] - p[b], P[a] + P[b]
         det = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] * S[:, 1, 0]
         maha = (S[:, 1, 1] * d[:, 0] ** 2 - (S[:, 0, 1] + S[:, 1, 0]) * d[:, 0] * d[:, 1]
@@ -529,7 +533,7 @@ class MultiTargetTracker:
         confirmed = [tr for tr in self.tracks if tr.confirmed]
         if len(confirmed) < 2:
             return
-        p = np.array([tr.filter.x[self._ix] for tr in confirmed])
+        p = self._xy(confirmed)
         close = cKDTree(p).query_pairs(self.multi.merge_distance_m, output_type="ndarray")
         if not len(close):
             return
@@ -562,6 +566,27 @@ class MultiTargetTracker:
         x = track.filter.x
         return TargetEstimate.of_arrays(track.filter.t, x.take(self._ix_at), x.take(self._iv_at),
                                          track.filter.P.take(self._ipv))
+
+    def _xy(self, tracks: Sequence[Track]) -> np.ndarray:
+        """(N, 2) horizontal positions of the tracks' filters."""
+        n = len(self.layout)
+        xs = [tr.filter.x for tr in tracks]
+        if all(x.shape == (n,) for x in xs):
+            return np.array(xs, dtype=float)[:, self._ix_at]
+        return np.array([x[self._ix] for x in xs])
+
+    def _estimates(self, tracks: Sequence[Track]) -> list[TargetEstimate]:
+        """:meth:`_estimate` of every track, their states gathered into arrays at once when the filters' states are
+        alike, as they are in one tracker (the same numbers: the same entries copied)."""
+        filters = [tr.filter for tr in tracks]
+        xs, Ps, ts = [f.x for f in filters], [f.P for f in filters], [f.t for f in filters]  # each read once
+        n = len(self.layout)
+        if len(tracks) < 2 or any(x.shape != (n,) for x in xs) or any(P.shape != (n, n) for P in Ps):
+            return [TargetEstimate.of_arrays(t, x.take(self._ix_at), x.take(self._iv_at), P.take(self._ipv))
+                    for t, x, P in zip(ts, xs, Ps, strict=True)]
+        X = np.array(xs, dtype=float)
+        P = np.array(Ps, dtype=float).reshape(len(tracks), n * n)
+        return TargetEstimate.rows_of(ts, X[:, self._ix_at], X[:, self._iv_at], P[:, self._ipv])
 
 
 def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionModel, target_height: float,

@@ -60,6 +60,27 @@ def test_the_likelihood_ratio_by_hand():
     np.testing.assert_allclose(got, [math.log(mixed @ C[:, 1] / 0.45), math.log(mixed @ C[:, 0] / 0.55)], rtol=1e-12)
 
 
+def test_many_tracks_and_pairs_in_any_order_match_the_formula_pair_by_pair():
+    """Tracks with and without readings, each in several pairs listed out of order: every pair's log λ is the
+    module docstring's formula for that pair alone."""
+    rng = np.random.default_rng(7)
+    eps, prior = 0.05, np.array([0.7, 0.3])
+    tracks = [track_at(3.0 * i, 0.0, readings=rng.integers(0, 2, size=i % 4).tolist()) for i in range(12)]
+    dets = [box(0, 0, colour=int(c)) for c in rng.integers(0, 2, size=9)] + [box(0, 0)]
+    rows, cols = rng.integers(0, 12, size=60), rng.integers(0, 10, size=60)
+    got = ClassAffinity({"colour": prior}, eps).log_ratios(tracks, dets, rows, cols)
+    want = []
+    for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
+        if not dets[j].classes:
+            want.append(0.0)
+            continue
+        ell = tracks[i].class_loglik.get("colour")
+        post = prior if ell is None else prior * np.exp(ell) / (prior * np.exp(ell)).sum()
+        L = C[:, dets[j].classes[0].observed]
+        want.append(math.log(((1 - eps) * post + eps * prior) @ L / (prior @ L)))
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+
+
 def test_a_track_that_read_nothing_and_a_detection_that_reads_nothing_are_neutral():
     aff = ClassAffinity({"colour": np.array([0.7, 0.3])}, 0.02)
     tracks = [track_at(0, 0), track_at(5, 0, readings=[1, 1])]

@@ -64,20 +64,22 @@ class ClassAffinity:
             if not sel.size:
                 continue
             L = np.stack([by_det[j] for j in cols[sel].tolist()])                    # (pairs, K)
-            pair_rows = rows[sel].tolist()
-            by_track = {i: self._predicted(tracks[i], name, prior) for i in set(pair_rows)}  # once per track
-            predicted = np.stack([by_track[i] for i in pair_rows])
+            uniq, at = np.unique(rows[sel], return_inverse=True)
+            predicted = self._predicted_many([tracks[i] for i in uniq.tolist()], name, prior)[at]  # once per track
             num = np.einsum("pk,pk->p", predicted, L)
             den = L @ prior
             out[sel] += np.log(np.maximum(num, 1e-300)) - np.log(np.maximum(den, 1e-300))
         return out
 
-    def _predicted(self, track: object, name: str, prior: np.ndarray) -> np.ndarray:
-        """``p̃`` of ``track`` for attribute ``name`` (``prior`` = π)."""
-        ell = getattr(track, "class_loglik", {}).get(name)
-        if ell is None or np.size(ell) != prior.size:
-            return prior
-        ell = np.asarray(ell, dtype=float)
-        w = prior * np.exp(ell - ell.max())
-        post = w / w.sum()
-        return (1.0 - self.swap_probability) * post + self.swap_probability * prior
+    def _predicted_many(self, tracks: Sequence[object], name: str, prior: np.ndarray) -> np.ndarray:
+        """(T, K) ``p̃`` of every track for attribute ``name`` (``prior`` = π; a track without readings of it: π),
+        those with readings computed together."""
+        out = np.tile(prior, (len(tracks), 1))
+        ells = [getattr(tr, "class_loglik", {}).get(name) for tr in tracks]
+        read = [k for k, ell in enumerate(ells) if ell is not None and np.size(ell) == prior.size]
+        if read:
+            E = np.array([ells[k] for k in read], dtype=float).reshape(len(read), prior.size)
+            w = prior * np.exp(E - E.max(axis=1, keepdims=True))
+            post = w / w.sum(axis=1, keepdims=True)
+            out[read] = (1.0 - self.swap_probability) * post + self.swap_probability * prior
+        return out

@@ -169,6 +169,7 @@ class CarFleet:
         for src in sources:
             self.sources.append((np.arange(start, start + len(src.ids)), src))
             start += len(src.ids)
+        self._kinematic = [fleet for _, fleet in [*self.traffic, *self.sources]]  # what moves boxes lazily
         lights = next((src.signal for src in sources if hasattr(src, "signal")), None)
         for i in self._phys:  # physics cars stop at the source's traffic lights (kinematic ones step compiled)
             self.drivers[i].signal = lights
@@ -223,6 +224,7 @@ class CarFleet:
         """Read every physics car's state row; the arrays of all cars are made when first needed (:meth:`_arrays`)."""
         self._prev_rows, self._rows = self._rows, [self.dynamics[i].state_row() for i in self._phys]
         self._arr: _Arrays | None = None
+        self._mot: tuple[np.ndarray, ...] | None = None
         self._phys_x: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def _phys_readings(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -235,37 +237,56 @@ class CarFleet:
             self._phys_x = (np.array(rows), np.array(h), np.array(v))
         return self._phys_x
 
-    def _arrays(self) -> _Arrays:
-        """Every car's reading at the last tick as arrays, with the heading and forward speed of each car and its
-        acceleration, the finite difference of v_W over the last physics step."""
-        if self._arr is None:
+    def _motion(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(xy, heading, forward speed, yaw rate, active) of every car at the last tick, kept until the next read: what
+        the physics cars' drivers read at their steps, without the rest of :meth:`_arrays` (a tick that reads no
+        state needs no more)."""
+        if self._mot is None:
             n, tick = self._n, self._tick
-            p_W, q_WB, v_W, a_W = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 3)), np.zeros((n, 3))
-            omega, yaw, speed = np.zeros(n), np.zeros(n), np.zeros(n)
+            xy, yaw, speed, omega = np.zeros((n, 2)), np.zeros(n), np.zeros(n), np.zeros(n)
+            active = np.ones(n, dtype=bool)
             if self._phys:
                 idx = self._phys
                 x, h, v = self._phys_readings()
-                speed[idx] = v
-                p_W[idx], q_WB[idx], v_W[idx], omega[idx], yaw[idx] = x[:, 0:3], x[:, 3:7], x[:, 7:10], x[:, 12], h
+                xy[idx], yaw[idx], speed[idx], omega[idx] = x[:, 0:2], h, v, x[:, 12]
+            for idx, fleet in self.traffic:
+                now, _ = fleet.readings(tick)
+                xy[idx, 0], xy[idx, 1] = now[:, R_X], now[:, R_Y]
+                omega[idx], yaw[idx], speed[idx] = now[:, R_OMEGA], now[:, R_YAWREAD], now[:, R_VFWD]
+            for idx, src in self.sources:
+                ps = src.poses(tick)
+                xy[idx], yaw[idx], speed[idx], omega[idx], active[idx] = ps.xy, ps.yaw, ps.speed, ps.yaw_rate, ps.active
+            self._mot = (xy, yaw, speed, omega, active)
+        return self._mot
+
+    def _arrays(self) -> _Arrays:
+        """Every car's reading at the last tick as arrays (:meth:`_motion` and the rest), with its acceleration, the
+        finite difference of v_W over the last physics step."""
+        if self._arr is None:
+            n, tick = self._n, self._tick
+            xy, yaw, speed, omega, active = self._motion()
+            p_W, q_WB, v_W, a_W = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 3)), np.zeros((n, 3))
+            p_W[:, :2] = xy
+            if self._phys:
+                idx = self._phys
+                x, _, _ = self._phys_readings()
+                p_W[idx, 2], q_WB[idx], v_W[idx] = x[:, 2], x[:, 3:7], x[:, 7:10]
                 if self._prev_rows is not None:
                     a_W[idx] = (x[:, 7:10] - np.array(self._prev_rows)[:, 7:10]) * self.physics_hz
             for idx, fleet in self.traffic:
                 now, prev = fleet.readings(tick)
-                p_W[idx, 0], p_W[idx, 1], p_W[idx, 2] = now[:, R_X], now[:, R_Y], fleet.ground_z
+                p_W[idx, 2] = fleet.ground_z
                 half = 0.5 * now[:, R_YAW]
                 q_WB[idx, 2], q_WB[idx, 3] = np.sin(half), np.cos(half)
                 v_W[idx, 0], v_W[idx, 1] = now[:, R_VX], now[:, R_VY]
-                omega[idx], yaw[idx], speed[idx] = now[:, R_OMEGA], now[:, R_YAWREAD], now[:, R_VFWD]
                 if prev is not None:
                     a_W[idx, 0] = (now[:, R_VX] - prev[:, R_VX]) * self.physics_hz
                     a_W[idx, 1] = (now[:, R_VY] - prev[:, R_VY]) * self.physics_hz
-            active = np.ones(n, dtype=bool)
             for idx, src in self.sources:
                 ps = src.poses(tick)
-                p_W[idx, 0], p_W[idx, 1], p_W[idx, 2] = ps.xy[:, 0], ps.xy[:, 1], src.ground_z
+                p_W[idx, 2] = src.ground_z
                 q_WB[idx, 2], q_WB[idx, 3] = np.sin(0.5 * ps.yaw), np.cos(0.5 * ps.yaw)
-                v_W[idx, :2], omega[idx], yaw[idx], speed[idx] = ps.v_xy, ps.yaw_rate, ps.yaw, ps.speed
-                active[idx] = ps.active
+                v_W[idx, :2] = ps.v_xy
                 if ps.a_xy is not None:  # the derivative of v_xy as the source moves it (SUMO: over its step)
                     a_W[idx, 0], a_W[idx, 1] = ps.a_xy[:, 0], ps.a_xy[:, 1]
             self._arr = _Arrays(p_W=p_W, q_WB=q_WB, v_W=v_W, omega_z=omega, a_W=a_W, yaw=yaw, speed=speed,
@@ -278,13 +299,14 @@ class CarFleet:
         for i, dyn in self.dynamics.items():
             dyn.actuate(self.drivers[i].command)
         if self.traffic or self.sources:
-            pts = [self._phys_readings()[0][:, 0:2]] if self._phys else []
+            near = self._phys_readings()[0][:, 0:2] if self._phys else None
             if self.near_points is not None:
                 q = np.asarray(self.near_points(), dtype=float).reshape(-1, 3)
-                pts.append(q[q[:, 2] < self._near_ceiling, :2])
-            if pts:
-                near = np.vstack(pts)
-                for _, fleet in [*self.traffic, *self.sources]:
+                low = q[:, 2] < self._near_ceiling
+                if low.any():  # most ticks none: UAVs fly above every box's reach
+                    near = q[low, :2] if near is None else np.concatenate((near, q[low, :2]))
+            if near is not None:
+                for fleet in self._kinematic:
                     fleet.sync_near(self._tick + 1, near, SYNC_RADIUS)
 
     def sync_scene(self) -> None:
@@ -318,14 +340,13 @@ class CarFleet:
         if self._phys and tick % self._every_gcd == 0:
             due = [i for i in self._phys if tick % self._every[i] == 0]
             if due:
-                x = self._arrays()
-                xy = np.where(x.active[:, None], x.p_W[:, :2], np.inf)  # a slot without a vehicle leads no one
-                leaders = find_leaders(self.drivers, xy, x.yaw, x.speed, self._lengths, followers=due)
+                xy, yaw, speed, omega, active = self._motion()
+                lead_xy = np.where(active[:, None], xy, np.inf)  # a slot without a vehicle leads no one
+                leaders = find_leaders(self.drivers, lead_xy, yaw, speed, self._lengths, followers=due)
                 for i in due:
                     drv = self.drivers[i]
-                    drv.update(x.p_W[i, :2], float(x.yaw[i]), float(x.speed[i]), tick, leaders[i],
-                               float(x.omega_z[i]))
-                    self.dynamics[i].on_driver_update(float(x.speed[i]))
+                    drv.update(xy[i], float(yaw[i]), float(speed[i]), tick, leaders[i], float(omega[i]))
+                    self.dynamics[i].on_driver_update(float(speed[i]))
                     self._events += [(i, dict(e, car=i)) for e in drv.pop_events()]
                     self._check_road(i, tick)
 

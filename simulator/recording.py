@@ -20,7 +20,7 @@ from simulator.scene import Scene
 from simulator.streams import STREAMS
 from simulator.truth import GroundFleet, UavFleet
 
-__all__ = ["ContactSource", "PybulletContacts", "Recording", "estimate_row", "track_row"]
+__all__ = ["ContactSource", "PybulletContacts", "Recording", "estimate_row", "track_columns"]
 
 _ESTIMATES, _COMMANDS, _TRACKS = STREAMS["estimates"], STREAMS["commands"], STREAMS["tracks"]
 
@@ -140,8 +140,8 @@ class Recording:
             return
         target = estimator.target_track_id
         reports = estimator.track_reports()
-        for rep in reports:
-            self.recorder.append("tracks", **track_row(tick, t, uav, rep, rep.track_id == target))
+        if reports:
+            self.recorder.append_rows("tracks", track_columns(tick, t, uav, reports, target))
         before = self._target_track.get(uav)
         if target == before:
             return
@@ -202,12 +202,22 @@ def estimate_row(tick: int, t: float, uav: int, est: TargetEstimate | None, used
     return row
 
 
-def track_row(tick: int, t: float, uav: int, rep: TrackReport, is_target: bool) -> dict:
-    """One row of ``tracks``: the track ``rep`` of UAV ``uav`` and whether the UAV takes it for the target."""
-    est = rep.estimate
-    row = _TRACKS.blank(tick=tick, t=t, uav=uav, track=int(rep.track_id), x=est.p_W[0], y=est.p_W[1], vx=est.v_W[0],
-                        vy=est.v_W[1], p_target=float(rep.target_probability), evidence=float(rep.evidence),
-                        confirmed=bool(rep.confirmed), is_target=bool(is_target))
-    if est.P is not None:
-        row.update(pxx=est.P[0, 0], pxy=est.P[0, 1], pyy=est.P[1, 1])
-    return row
+def track_columns(tick: int, t: float, uav: int, reports: Sequence[TrackReport], target: int | None) -> dict:
+    """The ``tracks`` rows of the tracks ``reports`` of UAV ``uav`` column by column, in the stream's order: one
+    per track, its estimate's position, velocity and horizontal covariance entries (NaN without a covariance), and
+    whether it is the track ``target`` names."""
+    n = len(reports)
+    ests = [r.estimate for r in reports]
+    p, v = np.array([e.p_W[:2] for e in ests]), np.array([e.v_W[:2] for e in ests])
+    cov = np.full((n, 3), np.nan)
+    has = [k for k, e in enumerate(ests) if e.P is not None]
+    if has:
+        P = np.array([ests[k].P[:2, :2] for k in has])
+        cov[has] = np.column_stack((P[:, 0, 0], P[:, 0, 1], P[:, 1, 1]))
+    cols = {"tick": [tick] * n, "t": [t] * n, "uav": [uav] * n, "track": [int(r.track_id) for r in reports],
+            "x": p[:, 0].tolist(), "y": p[:, 1].tolist(), "vx": v[:, 0].tolist(), "vy": v[:, 1].tolist(),
+            "pxx": cov[:, 0].tolist(), "pxy": cov[:, 1].tolist(), "pyy": cov[:, 2].tolist(),
+            "p_target": [float(r.target_probability) for r in reports],
+            "evidence": [float(r.evidence) for r in reports], "confirmed": [bool(r.confirmed) for r in reports],
+            "is_target": [r.track_id == target for r in reports]}
+    return {c: cols[c] for c in _TRACKS.columns}

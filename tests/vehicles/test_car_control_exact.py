@@ -10,7 +10,7 @@ from vehicles.car.body import _wheel_speed_list, wheel_speeds
 from vehicles.car.driver import Driver
 from vehicles.car.driver_config import DriverConfig
 from vehicles.car.lane_path import LanePath, _closest_segment
-from vehicles.car.longitudinal import _BRAKE_CURVE_MARGIN, curve_speed, envelope_accel
+from vehicles.car.longitudinal import _BRAKE_CURVE_MARGIN, curve_speed, envelope_accel, path_envelope_accel
 from vehicles.car.params import load_car
 from vehicles.car.route import Route
 
@@ -127,3 +127,29 @@ def test_wheel_speed_list_equals_the_array_formula():
         ref = v_r / SEDAN.wheel_radius * np.array([math.hypot(rl, tau), math.hypot(rr, tau), rl, rr])
         assert np.array(_wheel_speed_list(v, delta, SEDAN)).tobytes() == ref.tobytes()
         assert wheel_speeds(v, delta, SEDAN).tobytes() == ref.tobytes()
+
+
+def test_path_envelope_equals_envelope_accel_on_a_path_with_and_without_a_stop_line():
+    """The compiled envelope a driver's step uses reads the caps of the path points from the car's segment on (the
+    first at distance 0) and a stop line: the same bits as envelope_accel of those distances and caps."""
+    rng = np.random.default_rng(5)
+    for _ in range(3000):
+        n = int(rng.integers(3, 120))
+        s = np.cumsum(np.r_[0.0, rng.uniform(0.2, 1.2, n - 1)])
+        cap = rng.uniform(0.0, 20.0, n)
+        i0 = int(rng.integers(0, n - 2))
+        i1 = int(rng.integers(i0 + 2, n + 1))
+        s_car = float(s[i0] + rng.uniform(0.0, s[i0 + 1] - s[i0]))
+        with_stop = bool(rng.random() < 0.5)
+        stop_d = float(rng.uniform(-2.0, 60.0))
+        v = float(rng.uniform(0.0, 18.0))
+        kw = dict(gain=float(rng.uniform(0.5, 2.0)), decel_plan=float(rng.uniform(1.0, 3.0)),
+                  min_distance=max(2.0, 2 * v / 40))
+        d = np.r_[0.0, s[i0 + 1:i1] - s_car]
+        c = cap[i0:i1]
+        if with_stop:
+            d, c = np.r_[d, stop_d], np.r_[c, 0.0]
+        ref, _ = envelope_accel(v, d, c, **kw)
+        got = path_envelope_accel(v, s, cap, i0, i1, s_car, stop_d, with_stop, kw["gain"], kw["decel_plan"],
+                                  kw["min_distance"])
+        assert _bits(got) == _bits(ref)

@@ -28,7 +28,7 @@ import numpy as np
 
 from vehicles.car.driver_config import DriveCommand, DriverConfig, LeaderInfo
 from vehicles.car.lane_path import LanePath, PathProjection
-from vehicles.car.longitudinal import curve_speed, envelope_accel, idm_plus_accel
+from vehicles.car.longitudinal import curve_speed, idm_plus_accel, path_envelope_accel
 from vehicles.car.params import CarParams
 from vehicles.car.road_protocol import NetworkLike
 from vehicles.car.route import Route, RoutePlan
@@ -283,16 +283,9 @@ class Driver:
         reach = v * v / (2 * self.decel_plan) + cfg.lookahead_margin
         i0 = proj.index
         i1 = min(max(path.search(proj.s + reach), i0 + 2), len(path.s))  # path points from the car's segment on
-        m = i1 - i0
         with_stop = stop is not None and stop[0] - proj.s <= reach
-        d, cap = np.empty(m + with_stop), np.empty(m + with_stop)
-        np.subtract(path.s[i0:i1], proj.s, out=d[:m])
-        d[0] = 0.0  # the car's own position
-        cap[:m] = self._caps()[i0:i1]
-        if with_stop:
-            d[m], cap[m] = stop[0] - proj.s, 0.0
-        a, _ = envelope_accel(v, d, cap, gain=cfg.speed_gain, decel_plan=self.decel_plan,
-                              min_distance=max(2.0, 2 * v / cfg.rate_hz))
+        a = path_envelope_accel(v, path.s, self._caps(), i0, i1, proj.s, stop[0] - proj.s if with_stop else 0.0,
+                                with_stop, cfg.speed_gain, self.decel_plan, max(2.0, 2 * v / cfg.rate_hz))
         if leader is not None:
             a = min(a, idm_plus_accel(v, leader.speed, leader.gap, s0=cfg.idm_s0, time_headway=cfg.idm_time_headway,
                                       accel=self.accel_max, decel=self.decel_plan))

@@ -10,6 +10,7 @@ Everything a driver needs (projection, heading, curvature, speed limit, junction
 
 from __future__ import annotations
 
+import functools
 import math
 from bisect import bisect_right
 from collections.abc import Sequence
@@ -236,12 +237,24 @@ class LanePath:
         self.junction_s = np.maximum(js - np.where(np.asarray(smooth, dtype=bool), corner_length, 0.0), 0.0)
         self._t = d / np.maximum(seg, 1e-12)[:, None]
         self._seg = seg
-        # the same numbers as Python lists: the per-call scalar reads of project / locate / search are cheaper on them
-        self._s_list: list[float] = self.s.tolist()
-        self._seg_list: list[float] = seg.tolist()
-        self._heading_list: list[float] = self.heading.tolist()
-        self._road_index_list: list[int] = self.road_index.tolist()
-        self._road_s_list: list[float] = self.road_s.tolist()
+
+    # the same numbers as Python lists, made when first read: the bisections of locate / search are cheaper on them,
+    # and most paths of a city's traffic are never searched in Python (vehicles.car.traffic_fleet steps them compiled)
+    @functools.cached_property
+    def _s_list(self) -> list[float]:
+        return self.s.tolist()
+
+    @functools.cached_property
+    def _seg_list(self) -> list[float]:
+        return self._seg.tolist()
+
+    @functools.cached_property
+    def _road_index_list(self) -> list[int]:
+        return self.road_index.tolist()
+
+    @functools.cached_property
+    def _road_s_list(self) -> list[float]:
+        return self.road_s.tolist()
 
     @staticmethod
     def _smooth_join(a: RoadLike, b: RoadLike, off_a: float, off_b: float) -> bool:
@@ -271,13 +284,13 @@ class LanePath:
 
     def project_xy(self, px: float, py: float, hint: int | None = None, window: int = 60) -> PathProjection:
         """:meth:`project` of the point (``px``, ``py``) (m) given as two floats."""
-        n = len(self._seg_list)
+        n = self._seg.shape[0]
         lo, hi = (0, n) if hint is None else (max(0, hint - window), min(n, hint + window))
         k, u, lateral = _closest_segment(self.xy, self._t, self._seg, lo, hi, px, py)
-        h = self._heading_list
-        frac = u / max(self._seg_list[k], 1e-12)
-        heading = h[k] + frac * _wrap_float(h[k + 1] - h[k])
-        return PathProjection(s=self._s_list[k] + u, lateral=lateral, heading=heading, index=k)
+        h0, h1 = self.heading.item(k), self.heading.item(k + 1)
+        frac = u / max(self._seg.item(k), 1e-12)
+        heading = h0 + frac * _wrap_float(h1 - h0)
+        return PathProjection(s=self.s.item(k) + u, lateral=lateral, heading=heading, index=k)
 
     def search(self, s: float) -> int:
         """Number of samples at arc length <= ``s`` (m): ``np.searchsorted(self.s, s, side="right")``."""

@@ -14,9 +14,12 @@ so that at equal speeds the equilibrium gap is exactly s0 + v T (plain IDM's fre
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-__all__ = ["curve_speed", "envelope_accel", "idm_plus_accel"]
+import numpy as np
+from numba import njit
+
+__all__ = ["curve_speed", "envelope_accel", "idm_plus_accel", "path_envelope_accel"]
 
 
 def curve_speed(kappa: np.ndarray, lateral_accel_max: float) -> np.ndarray:
@@ -60,6 +63,29 @@ def envelope_accel(v: float, d: np.ndarray, v_cap: np.ndarray, *, gain: float, d
     if far.any():
         a = min(a, float(((v_cap2[far] - v * v) / (2.0 * d[far])).min()))
     return a, v_target
+
+
+@njit(cache=True)
+def path_envelope_accel(v, s, cap, i0, i1, s_car, stop_d, with_stop, gain, decel_plan, min_distance):
+    """:func:`envelope_accel` (its first value) of the caps ``cap[i0:i1]`` of a lane path's points at arc lengths
+    ``s[i0:i1]`` seen from arc length ``s_car`` (the first point at distance 0: the car's own segment), and, if
+    ``with_stop``, of a stop line (cap 0) ``stop_d`` m ahead; the same operations on each point, in compiled scalar
+    code (a driver's step calls it with a few dozen points: numpy's per-call overhead would be most of the cost)."""
+    v_target, brake = np.inf, np.inf
+    vals = i1 - i0 + (1 if with_stop else 0)
+    for q in range(vals):
+        if q == i1 - i0:
+            dq, cq = max(stop_d, 0.0), 0.0
+        else:
+            dq, cq = (0.0 if q == 0 else max(s[i0 + q] - s_car, 0.0)), cap[i0 + q]
+        vc = math.sqrt(cq * cq + 2.0 * decel_plan * dq)
+        v_target = min(v_target, vc)
+        if dq >= min_distance and cq < v and v >= vc - _BRAKE_CURVE_MARGIN:
+            brake = min(brake, (cq * cq - v * v) / (2.0 * dq))
+    a = gain * (v_target - v)
+    if brake < np.inf:
+        a = min(a, brake)
+    return a
 
 
 def idm_plus_accel(v: float, v_lead: float, gap: float, *, s0: float, time_headway: float, accel: float,

@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from vehicles.car.lane_path import _closest_segment
+from vehicles.car.longitudinal import path_envelope_accel
 
 __all__ = ["CFG", "MODE_DONE", "MODE_DRIVE", "MODE_STOPPED", "ROWS", "drive_all", "integrate", "locate_all"]
 
@@ -42,8 +43,6 @@ speed along it, the centre-of-mass velocity and the yaw rate of the present stat
 (R_X, R_Y, R_YAW, R_V, R_STEER, R_BETA, R_YAWRATE, R_YAWREAD, R_VFWD, R_VX, R_VY, R_OMEGA) = range(len(ROWS))
 
 MODE_DRIVE, MODE_STOPPED, MODE_DONE = 0, 1, 2
-
-_BRAKE_CURVE_MARGIN = 0.5  # vehicles.car.longitudinal._BRAKE_CURVE_MARGIN
 
 
 @njit(cache=True)
@@ -256,20 +255,7 @@ def drive_all(tick, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, 
         with_stop = has_stop and stop_s - own_s <= reach
         min_d = max(2.0, 2 * v / cfg[i, C_RATE])
         # caps of the path points from the car's segment on (the car's own point at distance 0), then the stop line
-        vals = i1 - i0 + (1 if with_stop else 0)
-        v_target, brake = np.inf, np.inf
-        for q in range(vals):
-            if q == i1 - i0:
-                dq, cq = max(stop_s - own_s, 0.0), 0.0
-            else:
-                dq, cq = (0.0 if q == 0 else max(ss[i0 + q] - own_s, 0.0)), P_cap[i, i0 + q]
-            vc = math.sqrt(cq * cq + 2.0 * b * dq)
-            v_target = min(v_target, vc)
-            if dq >= min_d and cq < v and v >= vc - _BRAKE_CURVE_MARGIN:
-                brake = min(brake, (cq * cq - v * v) / (2.0 * dq))
-        a = cfg[i, C_KV] * (v_target - v)
-        if brake < np.inf:
-            a = min(a, brake)
+        a = path_envelope_accel(v, ss, P_cap[i], i0, i1, own_s, stop_s - own_s, with_stop, cfg[i, C_KV], b, min_d)
         if best_j >= 0:
             am = cfg[i, C_AMAX]
             s_star = cfg[i, C_S0] + max(0.0, v * cfg[i, C_T] + v * (v - best_v) / (2.0 * math.sqrt(am * b)))

@@ -31,11 +31,13 @@ def client():
 
 def _reference(client, drivers, params, seconds, physics_hz=240):
     """The Python drivers and kinematic bicycles stepped every physics tick, as the car fleet stepped kinematic cars
-    before the compiled fleet: per tick (x, y, heading read from the quaternion, forward speed) and the events."""
+    before the compiled fleet: per tick (x, y, heading read from the quaternion, forward speed) and the events; and,
+    at every whole second, where each driver locates its car (road, arc length, lateral offset) and whether it
+    stands."""
     dyn = [KinematicDynamics(client, par, *d.spawn_pose(), physics_hz) for d, par in zip(drivers, params, strict=True)]
     every = drivers[0].config.ticks_per_update(physics_hz)
     lengths = [par.length for par in params]
-    out, events = [], []
+    out, events, located = [], [], {}
     for tick in range(1, int(seconds * physics_hz) + 1):
         for d, car in zip(drivers, dyn, strict=True):
             car.actuate(d.command)
@@ -49,7 +51,9 @@ def _reference(client, drivers, params, seconds, physics_hz=240):
                 d.update(xy[i], float(yaw[i]), float(speed[i]), tick, leaders[i], rows[i][12])
                 events += [dict(e, car=i) for e in d.pop_events()]
         out.append(np.column_stack([xy, yaw, speed]))
-    return np.array(out), events
+        if tick % physics_hz == 0:
+            located[tick] = ([d.locate(xy[i]) for i, d in enumerate(drivers)], [d.stopped for d in drivers])
+    return np.array(out), events, located
 
 
 def _drivers(net, n, seed, cfg):
@@ -71,7 +75,7 @@ def test_compiled_fleet_drives_the_python_drivers_trajectories_to_the_last_bit(c
     cfg = DriverConfig(rate_hz=rate_hz, cruise_change_period=8.0)
     n, seconds = 14, 40.0
     ref_drivers, params = _drivers(net, n, 7, cfg)
-    ref, ref_events = _reference(client, ref_drivers, params, seconds)
+    ref, ref_events, ref_located = _reference(client, ref_drivers, params, seconds)
     drivers, _ = _drivers(net, n, 7, cfg)
     fleet = TrafficFleet(client, drivers, params, [f"t{i}" for i in range(n)], 240)
     events = []
@@ -81,6 +85,11 @@ def test_compiled_fleet_drives_the_python_drivers_trajectories_to_the_last_bit(c
         now, _ = fleet.readings(tick)
         got = np.column_stack([now[:, R_X], now[:, R_Y], now[:, R_YAWREAD], now[:, R_VFWD]])
         assert np.array_equal(got, ref[tick - 1]), f"tick {tick}: max diff {np.abs(got - ref[tick - 1]).max()}"
+        if tick in ref_located:  # the compiled road positions are the drivers' own
+            ids, s_on, lateral, stopped = fleet.road_positions(tick)
+            where, stands = ref_located[tick]
+            assert ids == [w[0] for w in where] and stopped.tolist() == stands
+            assert np.array_equal(s_on, [w[1] for w in where]) and np.array_equal(lateral, [w[2] for w in where])
     assert [e["type"] for e in ref_events].count("car_stop") >= 10  # the walk exercised the rare steps
     key = lambda e: (e["tick"], e["car"], e["type"])  # noqa: E731 - the order within a tick is per car
     assert sorted(events, key=key) == sorted(ref_events, key=key)

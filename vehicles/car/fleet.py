@@ -374,21 +374,15 @@ class CarFleet:
         if self._cache is None:
             x = self._arrays()
             n = self._n
-            road_id, s, lateral = [""] * n, np.zeros(n), np.zeros(n)
+            road_id, s, lateral = np.full(n, "", dtype=object), np.zeros(n), np.zeros(n)
             stopped = np.zeros(n, dtype=bool)
-            stopped[:len(self.drivers)] = [d.stopped for d in self.drivers]
             for i in self._phys:
                 road_id[i], s[i], lateral[i] = self.drivers[i].locate(x.p_W[i, :2])
-            for idx, fleet in self.traffic:
-                ids, s_f, lat_f, _ = fleet.road_positions(self._tick)
-                for i, rid in zip(idx, ids, strict=True):
-                    road_id[i] = rid
-                s[idx], lateral[idx] = s_f, lat_f
-            for idx, src in self.sources:
+                stopped[i] = self.drivers[i].stopped
+            for idx, src in [*self.traffic, *self.sources]:
                 ids, s_f, lat_f, stop_f = src.road_positions(self._tick)
-                for i, rid in zip(idx, ids, strict=True):
-                    road_id[i] = rid
-                s[idx], lateral[idx], stopped[idx] = s_f, lat_f, stop_f
+                road_id[idx], s[idx], lateral[idx], stopped[idx] = ids, s_f, lat_f, stop_f
+            road_id = road_id.tolist()
             self._cache = CarState(
                 tick=self._tick, p_W=x.p_W.copy(), q_WB=x.q_WB.copy(), v_W=x.v_W.copy(), a_W=x.a_W.copy(),
                 yaw=x.yaw.copy(), speed=x.speed.copy(), road_id=road_id, s=s, lateral=lateral, stopped=stopped,

@@ -86,6 +86,7 @@ class TrafficFleet:
         self.cfg = np.array([[self._setting(d, par, name) for name in CFG] for d, par in zip(drivers, params,
                                                                                              strict=True)])
         self._codes = {rid: k for k, rid in enumerate(drivers[0].network.roads)}
+        self._road_ids = np.array(list(self._codes), dtype=object)  # code -> road id
         # state (x, y, yaw, speed, steer, beta, yaw rate) and the readings of every tick of the current period
         self.S = np.zeros((n, 7))
         self.S[:, 0:2] = [xy for xy, _ in spawns]
@@ -266,8 +267,8 @@ class TrafficFleet:
         out = np.zeros((len(r), 3))
         locate_all(np.ascontiguousarray(r[:, [R_X, R_Y]]), self.P_xy, self.P_t, self.P_seg, self.P_s, self.P_head,
                    self.P_ridx, self.P_laneoff, self.P_n, self.proj, self.P_roads, out)
-        ids = [d.plan.road_ids[int(k)] for d, k in zip(self.drivers, out[:, 0], strict=True)]
-        return ids, out[:, 1].copy(), out[:, 2].copy(), self.mode != MODE_DRIVE
+        codes = self.R_code[np.arange(len(r)), out[:, 0].astype(np.int64)]  # the roads of the cars' paths
+        return self._road_ids[codes].tolist(), out[:, 1].copy(), out[:, 2].copy(), self.mode != MODE_DRIVE
 
     # ---------------------------------------------------------------------------------------------- the scene
     def _place(self, idx: np.ndarray, tick: int) -> None:

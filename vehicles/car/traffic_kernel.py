@@ -281,26 +281,30 @@ def integrate(S, cmd, cfg, dt, buf):
         else:
             a = min(max(cmd[i, 0], -cfg[i, C_PDECEL]), cfg[i, C_PACCEL])
         wb = cfg[i, C_WB]
+        st_at, tan_d, cos_b = np.nan, 0.0, 1.0  # the steering angle tan_d, beta and cos_b were last computed for
         for k in range(1, ticks + 1):
             st += min(max(target - st, -rate), rate)
-            tan_d = math.tan(st)
-            beta = math.atan(0.5 * tan_d)
-            yr = spd * math.cos(beta) * tan_d / wb
+            if st != st_at:  # the same angle gives the same values: most ticks hold the steering
+                tan_d = math.tan(st)
+                beta = math.atan(0.5 * tan_d)
+                cos_b, st_at = math.cos(beta), st
+            yr = spd * cos_b * tan_d / wb
             ds = dt * spd
             x += ds * math.cos(yaw + beta)
             y += ds * math.sin(yaw + beta)
             yaw = (yaw + dt * yr + math.pi) % (2 * math.pi) - math.pi
             spd = min(max(0.0, spd + a * dt), cfg[i, C_VMAX])
-            _reading(buf, i, k, x, y, yaw, spd, st, beta, yr, wb)
+            _reading(buf, i, k, x, y, yaw, spd, st, beta, yr, wb, tan_d, cos_b)
         S[i, 0], S[i, 1], S[i, 2], S[i, 3], S[i, 4], S[i, 5], S[i, 6] = x, y, yaw, spd, st, beta, yr
 
 
 @njit(cache=True)
-def _reading(buf, i, k, x, y, yaw, spd, st, beta, yr, wb):
-    """One buffered tick: the state, and what the fleet reads (KinematicDynamics.state_row then CarFleet._arrays)."""
+def _reading(buf, i, k, x, y, yaw, spd, st, beta, yr, wb, tan_st, cos_beta):
+    """One buffered tick: the state, and what the fleet reads (KinematicDynamics.state_row then CarFleet._arrays);
+    ``tan_st`` and ``cos_beta`` are tan(st) and cos(beta)."""
     h = yaw + beta
     vx, vy = spd * math.cos(h), spd * math.sin(h)
-    omega = spd * math.cos(beta) * math.tan(st) / wb
+    omega = spd * cos_beta * tan_st / wb
     qz, qw = math.sin(0.5 * yaw), math.cos(0.5 * yaw)
     yaw_read = math.atan2(2 * (qw * qz + 0.0 * 0.0), 1 - 2 * (0.0 * 0.0 + qz * qz))
     r = buf[i, k]
@@ -314,7 +318,8 @@ def _reading(buf, i, k, x, y, yaw, spd, st, beta, yr, wb):
 def start_reading(buf, S, cfg):
     """``buf[:, 0]`` from the state ``S`` (the readings of a car at rest or after a Python-side change)."""
     for i in range(S.shape[0]):
-        _reading(buf, i, 0, S[i, 0], S[i, 1], S[i, 2], S[i, 3], S[i, 4], S[i, 5], S[i, 6], cfg[i, C_WB])
+        _reading(buf, i, 0, S[i, 0], S[i, 1], S[i, 2], S[i, 3], S[i, 4], S[i, 5], S[i, 6], cfg[i, C_WB],
+                 math.tan(S[i, 4]), math.cos(S[i, 5]))
 
 
 @njit(cache=True)

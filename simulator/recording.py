@@ -106,12 +106,18 @@ class Recording:
 
     def detections(self, tick: int, uav: int, sensor: str, out: SensorOutput) -> None:
         """One ``detections`` row per detection of a scan of UAV ``uav``'s sensor ``sensor``."""
-        for d, tid in zip(out.detections, out.truth_ids, strict=True):
-            z = np.full(4, np.nan)
-            z[: min(4, d.z.size)] = d.z[:4]
-            self.recorder.append("detections", tick=tick, t_meas=d.t_meas, t_arrival=d.t_arrival, uav=uav,
-                                 sensor=sensor, kind=d.model.name, truth_id=int(tid),
-                                 z0=z[0], z1=z[1], z2=z[2], z3=z[3])
+        dets = out.detections
+        n = len(dets)
+        if not n:
+            return
+        z = np.full((n, 4), np.nan)
+        for k, d in enumerate(dets):
+            z[k, : min(4, d.z.size)] = d.z[:4]
+        self.recorder.append_rows("detections", {
+            "tick": [tick] * n, "t_meas": [d.t_meas for d in dets], "t_arrival": [d.t_arrival for d in dets],
+            "uav": [uav] * n, "sensor": [sensor] * n, "kind": [d.model.name for d in dets],
+            "truth_id": [int(tid) for tid in out.truth_ids], "z0": z[:, 0], "z1": z[:, 1], "z2": z[:, 2],
+            "z3": z[:, 3]})
 
     def agent(self, tick: int, t: float, uav: int, estimator: TargetEstimator, result: AgentOutput,
               fused: bool) -> None:

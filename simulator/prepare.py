@@ -214,7 +214,6 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     scene.add_buildings(geometry.buildings)
     if geometry.road_mesh is not None:
         scene.add_road_surface(geometry.road_mesh)
-    query = PybulletSceneQuery(scene.client, scene.occluders)  # before any dynamic body (its docstring)
 
     quads = None
     if world.uavs:
@@ -235,6 +234,7 @@ def build_assembly(prep: Prepared, seeds: RunSeeds, recorder: RunRecorder) -> As
     uav_ids = [u.id for u in world.uavs]
     target_ids = world.target_ids()
     decoys = build_decoys(world.decoys, scene, CAR_RGBA)
+    query = PybulletSceneQuery(scene.client, scene.occluders)
     outages = [(o.link[0], o.link[1], clock.ticks(o.start_s), clock.ticks(o.end_s)) for o in world.comms.outages]
     channel = build_channel(world, clock.physics_hz, seeds.generator("comms/channel"), query)
     truth = Truth(quads, cars, car_kinds, decoys, car_attributes([g.type for g in world.ground_vehicles],

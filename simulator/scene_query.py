@@ -2,14 +2,10 @@
 
 ``line_of_sight`` casts the segments with ``p.rayTestBatch``, in chunks of ``p.MAX_RAY_INTERSECTION_BATCH_SIZE - 1``
 (pybullet 3.2.7 silently drops the last ray of a full batch).
-Bullet reports only the first body a ray hits. The occluders are given a collision-filter group bit of their own
-(:data:`OCCLUDER_GROUP`, beside the static bodies' default group and mask, so what collides with them is unchanged) and
-the rays are cast with it as their mask: they meet occluders only, in one cast, so a car in front of a building does
-not make the building transparent. When an occluder is not a single static body (which that bit could make collide
-with static bodies), rays are cast unfiltered instead, and when the body hit is not an occluder (a UAV, a car) the ray
-is cast again from just past the hit, up to ``max_passes`` times. A segment ending at or inside a car is clear,
-never blocked by what lies beyond, because rays stop at the segment's end (and, unfiltered, a ray starting inside a
-convex body does not hit it). A hit within ``end_tolerance``
+Bullet reports only the first body a ray hits; when that body is not an occluder (a UAV, a car) the ray is cast
+again from just past the hit, up to ``max_passes`` times, so a car in front of a building does not make the building
+transparent. A segment ending at or inside a car reports the car (clear), never what lies beyond, because rays
+stop at the segment's end and a ray starting inside a convex body does not hit it. A hit within ``end_tolerance``
 of the end point (a ground point lying on the terrain) does not block. A segment that *starts* inside an occluder
 is not blocked by it (Bullet rays do not hit a body from inside); sensors and radios sit outside buildings.
 
@@ -34,10 +30,6 @@ __all__ = ["PybulletSceneQuery", "try_load_egl"]
 
 # pybullet 3.2.7 returns only MAX_RAY_INTERSECTION_BATCH_SIZE - 1 results for a full batch of 16384 rays
 _RAY_BATCH = p.MAX_RAY_INTERSECTION_BATCH_SIZE - 1
-
-OCCLUDER_GROUP = 1 << 10
-"""Collision-filter group bit :class:`PybulletSceneQuery` gives the occluders (module docstring)."""
-_STATIC_GROUP, _STATIC_MASK = 2, -3  # Bullet's StaticFilter and AllFilter ^ StaticFilter: a body of mass 0's own
 
 
 _EGL_PROBE = """
@@ -99,15 +91,7 @@ class PybulletSceneQuery:
     end_tolerance : float
         A hit closer than this to the segment's end does not block (m).
     max_passes : int
-        Casts per segment when non-occluders are met on the way (unfiltered rays only).
-
-    Making one re-inserts the occluders into Bullet's broadphase: make it before the dynamic bodies, or contacts of
-    bodies already there with the occluders may be ordered otherwise (the same physics to rounding, not to the bit).
-
-    Attributes
-    ----------
-    filtered : bool
-        Whether rays meet only the occluders (every occluder a single static body, given :data:`OCCLUDER_GROUP`).
+        Casts per segment when non-occluders are met on the way.
     """
 
     def __init__(
@@ -128,30 +112,12 @@ class PybulletSceneQuery:
         self.end_tolerance = float(end_tolerance)
         self.max_passes = int(max_passes)
         self.rays_cast = 0
-        self.filtered = self._mark_occluders()
-
-    def _mark_occluders(self) -> bool:
-        """Give every occluder :data:`OCCLUDER_GROUP` with the static bodies' group and mask; False (nothing changed)
-        unless each is a single static body (no links, mass 0)."""
-        c = self.client_id
-        bodies = sorted(self.occluder_body_ids)
-        try:
-            if not bodies or any(p.getNumJoints(b, physicsClientId=c) != 0
-                                 or p.getDynamicsInfo(b, -1, physicsClientId=c)[0] != 0.0 for b in bodies):
-                return False
-        except p.error:  # not a body of this client
-            return False
-        for b in bodies:
-            p.setCollisionFilterGroupMask(b, -1, _STATIC_GROUP | OCCLUDER_GROUP, _STATIC_MASK, physicsClientId=c)
-        return True
 
     def _cast(self, a: np.ndarray, b: np.ndarray) -> list[tuple]:
         out: list[tuple] = []
         step = _RAY_BATCH
-        mask = {"collisionFilterMask": OCCLUDER_GROUP} if self.filtered else {}
         for k in range(0, len(a), step):
-            res = p.rayTestBatch(a[k : k + step].tolist(), b[k : k + step].tolist(), physicsClientId=self.client_id,
-                                 **mask)
+            res = p.rayTestBatch(a[k : k + step].tolist(), b[k : k + step].tolist(), physicsClientId=self.client_id)
             if len(res) != len(a[k : k + step]):
                 raise RuntimeError(f"rayTestBatch returned {len(res)} results for {len(a[k : k + step])} rays")
             out.extend(res)
@@ -164,14 +130,6 @@ class PybulletSceneQuery:
         if a.shape != b.shape or a.shape[1] != 3:
             raise ValueError(f"line_of_sight needs two (N, 3) arrays, got {a.shape} and {b.shape}")
         clear = np.ones(len(a), dtype=bool)
-        if self.filtered:  # every hit is an occluder's: blocked unless within the tolerance of the end
-            if len(a):
-                length = np.linalg.norm(b - a, axis=1)
-                hits = self._cast(a, b)
-                uid = np.array([h[0] for h in hits])
-                frac = np.array([h[2] for h in hits])
-                clear[(uid >= 0) & ((1.0 - frac) * length > self.end_tolerance)] = False
-            return clear
         active = np.arange(len(a))
         nudge = max(self.end_tolerance, 1e-4)
         for _ in range(self.max_passes):

@@ -71,59 +71,6 @@ def test_building_blocks_and_non_occluders_are_looked_through(town):
     assert uav not in sq.occluder_body_ids and car not in sq.occluder_body_ids
 
 
-def test_rays_meet_only_occluders_in_one_cast_behind_any_number_of_cars(town):
-    """Twelve car boxes in a row in front of a building, more than ``max_passes`` casts could pass one by one: the
-    occluders' own filter group makes every ray meet the building in one cast (blocked), and a ray ending among the
-    cars is clear."""
-    cid, sq = town
-    assert sq.filtered
-    for k in range(12):
-        add_box(cid, [2.0 + 1.5 * k, 0.0, 1.0], [0.5, 0.9, 0.75])
-    before = sq.rays_cast
-    got = sq.line_of_sight(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]), np.array([[40.0, 0.0, 1.0], [18.0, 0.0, 1.0]]))
-    np.testing.assert_array_equal(got, [False, True])
-    assert sq.rays_cast - before == 2  # one cast per segment
-    unfiltered = PybulletSceneQuery(cid, sq.occluder_body_ids | {-7})  # not a body: marks nothing, casts pass by pass
-    assert not unfiltered.filtered
-    assert unfiltered.line_of_sight(np.array([[0.0, 0.0, 1.0]]), np.array([[40.0, 0.0, 1.0]])).tolist() == [True]
-
-
-def _drop(mark: str | None) -> np.ndarray:
-    """A sphere dropped on a building's roof edge and a box dropped on a car box for 2 s; with ``mark`` ("early":
-    before the dropped bodies are made, "late": after) the building and the ground are a scene query's occluders.
-    Every tick's positions."""
-    cid = p.connect(p.DIRECT)
-    p.setGravity(0, 0, -9.81, physicsClientId=cid)
-    p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)  # as simulator.scene.Scene
-    plane = p.createMultiBody(0, p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid), physicsClientId=cid)
-    bld = add_box(cid, [0.0, 0.0, 5.0], [5.0, 5.0, 5.0])
-    add_box(cid, [20.0, 0.0, 0.75], [2.0, 0.9, 0.75])  # a car box: static, not an occluder
-    if mark == "early":
-        assert PybulletSceneQuery(cid, {plane, bld}).filtered
-    ball = p.createMultiBody(1.0, p.createCollisionShape(p.GEOM_SPHERE, radius=0.3, physicsClientId=cid), -1,
-                             [4.9, 0.0, 12.0], physicsClientId=cid)
-    crate = p.createMultiBody(2.0, p.createCollisionShape(p.GEOM_BOX, halfExtents=[0.3] * 3, physicsClientId=cid),
-                              -1, [19.5, 0.2, 3.0], physicsClientId=cid)
-    if mark == "late":
-        assert PybulletSceneQuery(cid, {plane, bld}).filtered
-    out = []
-    for _ in range(480):
-        p.stepSimulation(physicsClientId=cid)
-        out.append([*p.getBasePositionAndOrientation(ball, physicsClientId=cid)[0],
-                    *p.getBasePositionAndOrientation(crate, physicsClientId=cid)[0]])
-    p.disconnect(cid)
-    return np.array(out)
-
-
-def test_occluders_filter_group_leaves_every_collision_as_it_was():
-    """Made before the dynamic bodies (as the simulator does), the query's marking changes no bit of the physics;
-    made after them, contacts with the occluders agree to rounding."""
-    plain, early, late = _drop(None), _drop("early"), _drop("late")
-    assert plain[-1, 2] > 10.0 and 1.5 < plain[-1, 5] < 2.0  # the ball rests on the roof, the crate on the car
-    assert np.array_equal(early, plain)
-    np.testing.assert_allclose(late, plain, rtol=0, atol=1e-9)
-
-
 def test_agrees_with_exact_fake_scene_on_random_segments(town):
     _, sq = town
     rng = np.random.default_rng(12)

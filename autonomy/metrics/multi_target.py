@@ -6,8 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 __all__ = ["ospa", "GospaResult", "gospa", "gospa_of_pairs", "pairs_within"]
@@ -110,13 +108,11 @@ def gospa_of_pairs(m: int, n: int, i: np.ndarray, j: np.ndarray, d: np.ndarray, 
     D = np.minimum(np.asarray(d, dtype=float) ** p, 2.0 * half)
     near = D < 2.0 * half
     i, j, D = np.asarray(i)[near], np.asarray(j)[near], D[near]
-    pairs: list[tuple[int, int, float]] = []
+    pi, pj, pv = i[:0], j[:0], D[:0]  # the assigned pairs and their costs
     if len(D):
-        _, label = connected_components(coo_matrix((np.ones(len(D)), (i, m + j)), shape=(m + n, m + n)),
-                                        directed=False)
-        comp = label[i]
-        alone = np.bincount(comp)[comp] == 1  # a cluster of one pair: assigned, without a solver
-        pairs = list(zip(i[alone].tolist(), j[alone].tolist(), D[alone].tolist(), strict=True))
+        # a cluster of one pair (its truth and its estimate in no other pair): assigned, without a solver
+        alone = (np.bincount(i, minlength=m)[i] == 1) & (np.bincount(j, minlength=n)[j] == 1)
+        pi, pj, pv = i[alone], j[alone], D[alone]
         rest = np.flatnonzero(~alone)
         if len(rest):  # the contested clusters together: one rectangular assignment (0 off the pairs: unassigned)
             rows, r_at = np.unique(i[rest], return_inverse=True)
@@ -126,10 +122,12 @@ def gospa_of_pairs(m: int, n: int, i: np.ndarray, j: np.ndarray, d: np.ndarray, 
             full = np.full((len(rows), len(cols)), 2.0 * half)
             full[r_at, c_at] = D[rest]
             r, col = linear_sum_assignment(sub)
-            pairs += [(int(rows[a]), int(cols[b]), float(full[a, b])) for a, b in zip(r, col, strict=True)
-                      if full[a, b] < 2.0 * half]
-    pairs.sort()
-    loc, k = float(sum(v for _, _, v in pairs)), len(pairs)
+            hit = full[r, col] < 2.0 * half
+            pi, pj, pv = (np.concatenate((pi, rows[r[hit]])), np.concatenate((pj, cols[col[hit]])),
+                          np.concatenate((pv, full[r[hit], col[hit]])))
+    # the costs summed one after another in (truth, estimate) order (np.cumsum: as a Python sum of the sorted pairs)
+    pv = pv[np.lexsort((pj, pi))]
+    loc, k = (float(np.cumsum(pv)[-1]) if len(pv) else 0.0), len(pv)
     missed, false = m - k, n - k
     total = loc + half * (missed + false)
     return GospaResult(distance=float(total ** (1.0 / p)), localisation=loc, missed=missed, false=false)

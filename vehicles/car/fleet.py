@@ -302,8 +302,9 @@ class CarFleet:
             near = self._phys_readings()[0][:, 0:2] if self._phys else None
             if self.near_points is not None:
                 q = np.asarray(self.near_points(), dtype=float).reshape(-1, 3)
-                low = q[:, 2] < self._near_ceiling
-                if low.any():  # most ticks none: UAVs fly above every box's reach
+                ceiling = self._near_ceiling
+                if any(z < ceiling for z in q[:, 2].tolist()):  # most ticks none: UAVs fly above every box's reach
+                    low = q[:, 2] < ceiling
                     near = q[low, :2] if near is None else np.concatenate((near, q[low, :2]))
             if near is not None:
                 for fleet in self._kinematic:

@@ -474,7 +474,11 @@ class MultiTargetTracker:
         for w, det in weighted:
             for c in getattr(det, "classes", ()):
                 lik = np.asarray(c.likelihood(), dtype=float)
-                by_attr[c.attribute] = by_attr.get(c.attribute, np.full(lik.size, none_weight)) + w * lik
+                prev = by_attr.get(c.attribute)
+                if prev is None and w == 1.0 and none_weight == 0.0:  # one detection taken whole: 0 + 1 · lik
+                    by_attr[c.attribute] = lik
+                else:
+                    by_attr[c.attribute] = (np.full(lik.size, none_weight) if prev is None else prev) + w * lik
         if not by_attr:
             return
         ident = self.identity.config

@@ -16,7 +16,7 @@ from vehicles.car.params import load_car
 from vehicles.car.route import Route
 from vehicles.car.traffic import find_leaders
 from vehicles.car.traffic_fleet import TrafficFleet
-from vehicles.car.traffic_kernel import R_VFWD, R_X, R_Y, R_YAWREAD
+from vehicles.car.traffic_kernel import R_VFWD, R_X, R_Y, R_YAWREAD, drive_all
 from vehicles.car.traffic_source import OtherCars
 
 SEDAN, VAN = load_car("sedan"), load_car("van")
@@ -96,6 +96,55 @@ def test_compiled_fleet_drives_the_python_drivers_trajectories_to_the_last_bit(c
     assert fleet.compiled_steps > 10 * fleet.python_steps
     # the run left some cars following others: the leader search was exercised, not only free driving
     assert any(d.command.accel < 0 for d in ref_drivers) or ref[-1, :, 3].min() < 1.0
+
+
+def _compiled_leader(fleet: TrafficFleet, others_xy: np.ndarray) -> np.ndarray:
+    """The compiled leader (gap, speed, index) of the fleet's one car among still cars at ``others_xy``."""
+    X = np.ascontiguousarray(fleet.buf[:, fleet.every])
+    ox = np.column_stack([others_xy, np.zeros(len(others_xy)), np.full(len(others_xy), 5.0)])
+    flag, leader, off = np.zeros(1, dtype=np.bool_), np.zeros((1, 3)), fleet.off_road.copy()
+    drive_all(fleet.every, X, ox, np.full(len(others_xy), SEDAN.length), fleet.P_xy, fleet.P_t, fleet.P_seg,
+              fleet.P_s, fleet.P_head, fleet.P_kappa, fleet.P_cap, fleet.P_ridx, fleet.P_corner, fleet.P_lanew,
+              fleet.P_laneoff, fleet.P_n, fleet.R_code, fleet.R_width, fleet.J_s, fleet.J_flag, fleet.J_n,
+              fleet.ends_route, fleet.proj.copy(), fleet.last_code, fleet.mode, fleet.release_tick,
+              fleet.next_cruise, fleet.cfg, 2.0, np.zeros((1, 3)), flag, leader, off)
+    return leader[0]
+
+
+def test_the_leader_search_passes_over_only_cars_provably_beside_the_path(client):
+    """Cars scattered around a car's lane path through a turn: beside it, on it, and on the extension of the last
+    segment the search looks at (where a car far from the path can still lie within half a lane of that segment's
+    line). The compiled search, which passes over cars it can prove lie beside the path without projecting them, finds
+    find_leaders' leader every time."""
+    net = grid_network(3, 100.0)
+    rng = np.random.default_rng(4)
+    found = 0
+    for trial in range(60):
+        cfg = DriverConfig(rate_hz=20)
+        route = Route(roads=("h0_0.f", "v1_0.f", "h1_1.f"), start_s=float(rng.uniform(5.0, 90.0)))  # a left turn
+        drv = Driver(config=cfg, params=SEDAN, route=route, network=net, rng=np.random.default_rng(trial))
+        fleet = TrafficFleet(client, [drv], [SEDAN], ["t0"], 240)
+        car = fleet.buf[0, fleet.every]
+        path = drv.path
+        own = path.project(np.array([car[R_X], car[R_Y]]))
+        half_window = int(cfg.follow_range / (2 * cfg.path_ds)) + 2
+        end = min(len(path.s) - 1, own.index + 2 * half_window + 2)  # the last point the search looks at
+        tangent = path.xy[end] - path.xy[end - 1]
+        tangent /= np.linalg.norm(tangent)
+        k = rng.integers(0, len(path.s), 40)
+        beside = path.xy[k] + rng.normal(0.0, 6.0, (40, 2))
+        beyond = path.xy[end] + np.outer(rng.uniform(0.5, 30.0, 10), tangent) + rng.normal(0.0, 0.8, (10, 2))
+        others = np.vstack([beside, beyond])[rng.permutation(50)[: int(rng.integers(1, 50))]]
+        got = _compiled_leader(fleet, others)
+        xy = np.vstack([[car[R_X], car[R_Y]], others])
+        want = find_leaders([drv] + [drv] * len(others), xy, np.r_[car[R_YAWREAD], np.zeros(len(others))],
+                            np.r_[car[R_VFWD], np.full(len(others), 5.0)], [SEDAN.length] * len(xy), followers=[0])[0]
+        if want is None:
+            assert got[2] < 0, trial
+        else:
+            found += 1
+            assert (got[0], got[1], int(got[2])) == (want.gap, want.speed, want.index), trial
+    assert 10 < found < 60  # both outcomes exercised
 
 
 def _queue_fleet(client, dynamics):

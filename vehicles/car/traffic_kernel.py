@@ -125,6 +125,36 @@ def _project(xy, t, seg, s, head, npts, hint, window, px, py):
     return s[k] + u, lat, head[k] + frac * _wrap(head[k + 1] - head[k]), k
 
 
+_LEADER_SKIP_MARGIN = 1e-6  # m; a car is passed over only when provably this much wider of the lane than allowed
+
+
+@njit(cache=True)
+def _leader_window(xy, tt, lanew, ridx, npts, hint, window):
+    """What bounds the lateral offset of any point from the path segments ``_project(..., hint, window, ...)``
+    searches, [lo, hi): (x0, x1, y0, y1) the bounding box of their points, ``cmin`` the least cosine of the turn
+    between consecutive segments, ``hmax`` the largest half lane width of their points, and ``hi`` (hi <= lo: none
+    searched). A point whose nearest point on them lies inside a segment is offset by its distance to it; one nearest
+    a vertex between two segments (on the outside of their turn) by at least that distance times the turn's cosine;
+    nearest the first point, it is not ahead of a car on those segments; nearest the last point, it may lie on the
+    extension of the last segment (any offset). So a point not beyond the last point along the last segment whose
+    distance to the box times ``cmin`` exceeds ``hmax`` is no car's leader on this path."""
+    n = npts - 1
+    lo, hi = max(0, hint - window), min(n, hint + window)
+    if hi <= lo:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, hi
+    x0 = x1 = xy[lo, 0]
+    y0 = y1 = xy[lo, 1]
+    for k in range(lo + 1, hi + 1):
+        x0, x1 = min(x0, xy[k, 0]), max(x1, xy[k, 0])
+        y0, y1 = min(y0, xy[k, 1]), max(y1, xy[k, 1])
+    hmax, cmin = 0.0, 1.0
+    for k in range(lo, hi):
+        hmax = max(hmax, 0.5 * lanew[ridx[k]])
+    for k in range(lo, hi - 1):
+        cmin = min(cmin, tt[k, 0] * tt[k + 1, 0] + tt[k, 1] * tt[k + 1, 1])
+    return x0, x1, y0, y1, cmin, hmax, hi
+
+
 @njit(cache=True)
 def _cells(xy, cell):
     """Sorted uniform-grid keys of points (and the order that sorts them) for neighbour searches."""
@@ -177,6 +207,9 @@ def drive_all(tick, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, 
         hint = own_k + half_window
         reach2 = cfg[i, C_FOLLOW] + cfg[i, C_LEN]
         best_gap, best_v, best_j = 0.0, 0.0, -1
+        wx0, wx1, wy0, wy1, cmin, hmax, whi = _leader_window(xy, tt, P_lanew[i], P_ridx[i], npts, hint,
+                                                             half_window + 2)
+        can_skip = whi > max(0, hint - half_window - 2) and cmin > 0.0
         for dx in range(-1, 2):
             for dy in range(-1, 2):
                 key = (cx[i] + dx) * 2097152 + (cy[i] + dy)
@@ -189,6 +222,13 @@ def drive_all(tick, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, 
                     ddx, ddy = allxy[j, 0] - px, allxy[j, 1] - py
                     if not math.sqrt(ddx * ddx + ddy * ddy) < reach2:
                         continue
+                    if can_skip:  # provably beside this path (_leader_window): no projection needed
+                        qx, qy = allxy[j, 0], allxy[j, 1]
+                        ex, ey = max(wx0 - qx, 0.0, qx - wx1), max(wy0 - qy, 0.0, qy - wy1)
+                        beyond = (qx - xy[whi, 0]) * tt[whi - 1, 0] + (qy - xy[whi, 1]) * tt[whi - 1, 1]
+                        if (beyond < -_LEADER_SKIP_MARGIN
+                                and math.sqrt(ex * ex + ey * ey) * cmin > hmax + _LEADER_SKIP_MARGIN):
+                            continue
                     sj, latj, headj, kj = _project(xy, tt, seg, ss, head, npts, hint, half_window + 2,
                                                    allxy[j, 0], allxy[j, 1])
                     if sj <= own_s:

@@ -132,12 +132,12 @@ _LEADER_SKIP_MARGIN = 1e-6  # m; a car is passed over only when provably this mu
 def _leader_window(xy, tt, lanew, ridx, npts, hint, window):
     """What bounds the lateral offset of any point from the path segments ``_project(..., hint, window, ...)``
     searches, [lo, hi): (x0, x1, y0, y1) the bounding box of their points, ``cmin`` the least cosine of the turn
-    between consecutive segments, ``hmax`` the largest half lane width of their points, and ``hi`` (hi <= lo: none
-    searched). A point whose nearest point on them lies inside a segment is offset by its distance to it; one nearest
-    a vertex between two segments (on the outside of their turn) by at least that distance times the turn's cosine;
-    nearest the first point, it is not ahead of a car on those segments; nearest the last point, it may lie on the
-    extension of the last segment (any offset). So a point not beyond the last point along the last segment whose
-    distance to the box times ``cmin`` exceeds ``hmax`` is no car's leader on this path."""
+    between consecutive segments (0 when none is searched: nothing may be passed over), ``hmax`` the largest half lane
+    width of their points, and ``hi``. A point whose nearest point on them lies inside a segment is offset by its
+    distance to it; one nearest a vertex between two segments (on the outside of their turn) by at least that distance
+    times the turn's cosine; nearest the first point, it is not ahead of a car on those segments; nearest the last
+    point, it may lie on the extension of the last segment (any offset). So a point not beyond the last point along
+    the last segment whose distance to the box times ``cmin`` exceeds ``hmax`` is no car's leader on this path."""
     n = npts - 1
     lo, hi = max(0, hint - window), min(n, hint + window)
     if hi <= lo:
@@ -209,7 +209,7 @@ def drive_all(tick, X, OX, OLEN, P_xy, P_t, P_seg, P_s, P_head, P_kappa, P_cap, 
         best_gap, best_v, best_j = 0.0, 0.0, -1
         wx0, wx1, wy0, wy1, cmin, hmax, whi = _leader_window(xy, tt, P_lanew[i], P_ridx[i], npts, hint,
                                                              half_window + 2)
-        can_skip = whi > max(0, hint - half_window - 2) and cmin > 0.0
+        can_skip = cmin > 0.0
         for dx in range(-1, 2):
             for dy in range(-1, 2):
                 key = (cx[i] + dx) * 2097152 + (cy[i] + dy)

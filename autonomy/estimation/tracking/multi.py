@@ -567,9 +567,7 @@ class MultiTargetTracker:
         return None
 
     def _estimate(self, track: Track) -> TargetEstimate:
-        x = track.filter.x
-        return TargetEstimate.of_arrays(track.filter.t, x.take(self._ix_at), x.take(self._iv_at),
-                                         track.filter.P.take(self._ipv))
+        return self._estimates([track])[0]
 
     def _xy(self, tracks: Sequence[Track]) -> np.ndarray:
         """(N, 2) horizontal positions of the tracks' filters."""
@@ -580,8 +578,9 @@ class MultiTargetTracker:
         return np.array([x[self._ix] for x in xs])
 
     def _estimates(self, tracks: Sequence[Track]) -> list[TargetEstimate]:
-        """:meth:`_estimate` of every track, their states gathered into arrays at once when the filters' states are
-        alike, as they are in one tracker (the same numbers: the same entries copied)."""
+        """Every track's estimate at its filter's time: position, velocity and their covariance taken from the
+        filter's state, gathered into arrays at once when the filters' states are alike, as they are in one tracker
+        (the same numbers either way: the same entries copied)."""
         filters = [tr.filter for tr in tracks]
         xs, Ps, ts = [f.x for f in filters], [f.P for f in filters], [f.t for f in filters]  # each read once
         n = len(self.layout)

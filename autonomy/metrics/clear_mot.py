@@ -46,13 +46,15 @@ class ClearMotMatcher:
         self._distances: list[np.ndarray] = []  # per step: matched distances in motmetrics' event order, 0 elsewhere
         self._pairs: list[np.ndarray] = []  # per step: (vehicle id, track id) of every pair within the radius
 
-    def update(self, oids: np.ndarray, hids: np.ndarray, d: np.ndarray) -> None:
-        """One step: vehicles ``oids`` (n,), tracks ``hids`` (m,) (int64, unique) and their distances ``d`` (n, m),
-        NaN where a pair cannot match (beyond the radius)."""
+    def update(self, oids: np.ndarray, hids: np.ndarray, pair_o: np.ndarray, pair_h: np.ndarray,
+               pair_d: np.ndarray) -> None:
+        """One step: vehicles ``oids`` (n,), tracks ``hids`` (m,) (int64, unique) and the pairs within the match
+        radius: vehicle ``oids[pair_o[k]]`` and track ``hids[pair_h[k]]``, ``pair_d[k]`` apart (m), each pair once."""
         no, nh = len(oids), len(hids)
-        finite = np.isfinite(d)
-        fi, fj = np.nonzero(finite)
-        self._pairs.append(np.stack((oids[fi], hids[fj]), axis=1))
+        self._pairs.append(np.stack((oids[pair_o], hids[pair_h]), axis=1))
+        d = np.full((no, nh), np.nan)  # NaN: cannot match
+        d[pair_o, pair_h] = pair_d
+        finite = ~np.isnan(d)
         o_done = np.zeros(no, dtype=bool)
         h_done = np.zeros(nh, dtype=bool)
         matched: list[float] = []

@@ -123,7 +123,7 @@ class ClearMot:
         self._fed_truth = 0  # truth and track instances fed to it
         self._fed_tracks = 0
         self._gospa: list[float] = []
-        self._present: dict[int, int] = {}  # vehicle id -> steps present (fed to the matcher or not)
+        self._truth_ids: list[np.ndarray] = []  # per step fed: the vehicles present (fed to the matcher or not)
         self._unfed_truth = 0  # truth instances with no track within the radius: misses by construction
         self._unfed_tracks = 0  # track instances with no vehicle within the radius: false positives by construction
 
@@ -155,17 +155,14 @@ class ClearMot:
         for k in range(self._fed, len(self._steps)):
             _, gt_ids, gt_xy, hyp_ids, hyp_xy = self._steps[k]
             i, j, dij = pairs_within(gt_xy, hyp_xy, r)  # a k-d tree: a city's vehicles are mostly far from a track
-            for g in gt_ids.tolist():
-                self._present[g] = self._present.get(g, 0) + 1
+            self._truth_ids.append(gt_ids)
             rows, i_at = np.unique(i, return_inverse=True)  # only those with a counterpart (module docstring)
             cols, j_at = np.unique(j, return_inverse=True)
             self._unfed_truth += len(gt_ids) - len(rows)
             self._unfed_tracks += len(hyp_ids) - len(cols)
             self._fed_truth += len(rows)
             self._fed_tracks += len(cols)
-            d = np.full((len(rows), len(cols)), np.nan)  # NaN: cannot match
-            d[i_at, j_at] = dij
-            self._matcher.update(gt_ids[rows], hyp_ids[cols], d)
+            self._matcher.update(gt_ids[rows], hyp_ids[cols], i_at, j_at, dij)
             self._gospa.append(gospa_of_pairs(len(gt_ids), len(hyp_ids), i, j, dij, c=r, p=2.0).distance)
         self._fed = len(self._steps)
         m = self._matcher
@@ -174,13 +171,15 @@ class ClearMot:
         false = m.false_positives + self._unfed_tracks
         predictions = self._fed_tracks + self._unfed_tracks
         switches = m.switches
-        ratios = [_divide(m.tracked.get(g, 0), n) for g, n in self._present.items()]
+        present, steps_present = np.unique(np.concatenate(self._truth_ids), return_counts=True)
+        tracked = m.tracked
+        ratios = np.array([tracked.get(g, 0) for g in present.tolist()], dtype=float) / steps_present
         return MotSummary(steps=len(self._steps), match_radius_m=r,
                           mota=1.0 - _divide(misses + switches + false, objects),
                           motp_m=_divide(m.distance_sum(), m.detections),
                           idf1=_divide(2 * m.identity_true_positives(), objects + predictions),
-                          num_switches=switches, mostly_tracked=sum(q >= 0.8 for q in ratios),
-                          mostly_lost=sum(q < 0.2 for q in ratios), false_positives=false, misses=misses,
+                          num_switches=switches, mostly_tracked=int(np.sum(ratios >= 0.8)),
+                          mostly_lost=int(np.sum(ratios < 0.2)), false_positives=false, misses=misses,
                           truth_instances=objects, matches=m.detections, gospa_mean_m=float(np.mean(self._gospa)))
 
 

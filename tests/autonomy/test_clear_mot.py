@@ -32,6 +32,11 @@ def _crowd(seed: int, n_cars: int, n_tracks: int, steps: int, radius: float, are
     return out
 
 
+def _pairs(d):
+    i, j = np.nonzero(np.isfinite(d))
+    return i, j, d[i, j]
+
+
 def _reference(steps):
     import motmetrics as mm
 
@@ -54,7 +59,7 @@ def test_the_matcher_counts_and_sums_as_motmetrics_does(seed, n_cars, n_tracks, 
     ref, ref_tracked = _reference(steps)
     m = ClearMotMatcher()
     for oids, hids, d in steps:
-        m.update(oids, hids, d)
+        m.update(oids, hids, *_pairs(d))
     assert ref["num_switches"] > 0 and ref["num_misses"] > 0 and ref["num_false_positives"] > 0
     assert (m.matches, m.switches, m.misses, m.false_positives, m.detections) == (
         ref["num_matches"], ref["num_switches"], ref["num_misses"], ref["num_false_positives"],
@@ -70,12 +75,12 @@ def test_a_vehicle_keeps_its_track_unless_another_vehicle_took_it_first_or_it_is
     which 2 held: a switch for 1."""
     nan = np.nan
     m = ClearMotMatcher()
-    m.update(np.array([1]), np.array([9]), np.array([[1.0]]))  # 1 - 9
-    m.update(np.array([2]), np.array([9]), np.array([[2.0]]))  # 2 - 9 (1 away)
+    m.update(np.array([1]), np.array([9]), *_pairs(np.array([[1.0]])))  # 1 - 9
+    m.update(np.array([2]), np.array([9]), *_pairs(np.array([[2.0]])))  # 2 - 9 (1 away)
     assert (m.matches, m.switches) == (2, 0)
-    m.update(np.array([1, 2]), np.array([8, 9]), np.array([[3.0, 1.5], [4.0, 0.5]]))  # 1 keeps 9; 2 -> 8
+    m.update(np.array([1, 2]), np.array([8, 9]), *_pairs(np.array([[3.0, 1.5], [4.0, 0.5]])))  # 1 keeps 9; 2 -> 8
     assert (m.matches, m.switches) == (3, 1)
-    m.update(np.array([1, 2]), np.array([8, 9]), np.array([[3.0, nan], [nan, nan]]))  # 1 -> 8; 2 missed
+    m.update(np.array([1, 2]), np.array([8, 9]), *_pairs(np.array([[3.0, nan], [nan, nan]])))  # 1 -> 8; 2 missed
     assert (m.matches, m.switches, m.misses, m.false_positives) == (3, 2, 1, 1)
     assert m.tracked == {1: 3, 2: 2}
     assert m.distance_sum() == pytest.approx(1.0 + 2.0 + 1.5 + 4.0 + 3.0)

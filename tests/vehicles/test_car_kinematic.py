@@ -125,6 +125,30 @@ def test_a_falling_body_lands_on_the_box_and_does_not_move_it(client):
     assert car.state_row()[:7] == (0.0, 0.0, VAN.cog_height, 0.0, 0.0, 0.0, 1.0)
 
 
+def test_a_box_moved_while_asleep_is_where_rays_and_contacts_find_it(client):
+    """Car boxes sleep (Bullet leaves their bounding boxes alone between moves); placing one still moves what rays
+    and contacts see at once: a ray at the old spot meets nothing, one at the new spot meets the roof, and a ball
+    dropped there comes to rest on it."""
+    from vehicles.car.box_body import CarBoxBody, yaw_quaternion
+
+    box = CarBoxBody(client, VAN, np.array([0.0, 0.0]), 0.0)
+    for _ in range(10):
+        p.stepSimulation(physicsClientId=client)
+    box.place(40.0, -7.0, yaw_quaternion(0.5))
+    old, new = p.rayTestBatch([[0.0, 0.0, 10.0], [40.0, -7.0, 10.0]], [[0.0, 0.0, 0.5], [40.0, -7.0, 0.5]],
+                              physicsClientId=client)
+    assert old[0] != box.body_id
+    assert new[0] == box.body_id and new[3][2] == pytest.approx(VAN.height, abs=1e-3)
+    r = 0.2
+    ball = p.createMultiBody(1.0, p.createCollisionShape(p.GEOM_SPHERE, radius=r, physicsClientId=client),
+                             basePosition=[40.0, -7.0, 4.0], physicsClientId=client)
+    for _ in range(480):
+        p.stepSimulation(physicsClientId=client)
+    assert p.getContactPoints(bodyA=ball, bodyB=box.body_id, physicsClientId=client)
+    assert p.getBasePositionAndOrientation(ball, physicsClientId=client)[0][2] == pytest.approx(VAN.height + r,
+                                                                                                abs=0.01)
+
+
 def _travelled(p_xy: np.ndarray) -> np.ndarray:
     return np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p_xy, axis=0), axis=1))]
 

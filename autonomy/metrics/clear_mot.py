@@ -44,7 +44,9 @@ class ClearMotMatcher:
         self.tracked: dict[int, int] = {}
         """Vehicle id -> steps matched (MATCH or SWITCH)."""
         self._distances: list[np.ndarray] = []  # per step: matched distances in motmetrics' event order, 0 elsewhere
-        self._pairs: list[np.ndarray] = []  # per step: (vehicle id, track id) of every pair within the radius
+        self._pairs: list[np.ndarray] = []  # per step since the last summary: (vehicle id, track id) within the radius
+        self._met = np.zeros((0, 2), dtype=np.int64)  # the distinct pairs of earlier steps ...
+        self._met_steps = np.zeros(0, dtype=np.int64)  # ... and the steps each was within the radius
 
     def update(self, oids: np.ndarray, hids: np.ndarray, pair_o: np.ndarray, pair_h: np.ndarray,
                pair_d: np.ndarray) -> None:
@@ -101,25 +103,30 @@ class ClearMotMatcher:
         """The sum of the matched pairs' distances (m), summed as motmetrics sums its event table."""
         if not self._distances:
             return 0.0
-        return float(np.concatenate(self._distances).sum())
+        self._distances = [np.concatenate(self._distances)]  # one array: a run asks at every flush
+        return float(self._distances[0].sum())
 
     def identity_true_positives(self) -> int:
         """IDF1's IDTP over every step so far (module docstring)."""
-        if not self._pairs:
-            return 0
-        return identity_true_positives(np.concatenate(self._pairs))
+        if self._pairs:  # fold the new steps into the counts, so each summary costs what is new and what met
+            new = np.concatenate(self._pairs)
+            self._met, self._met_steps = _counted(np.concatenate((self._met, new)),
+                                                  np.concatenate((self._met_steps, np.ones(len(new), dtype=np.int64))))
+            self._pairs = []
+        return identity_true_positives(self._met, self._met_steps)
 
 
-def identity_true_positives(pairs: np.ndarray) -> int:
+def identity_true_positives(pairs: np.ndarray, steps: np.ndarray | None = None) -> int:
     """The largest total count over one-to-one assignments of vehicles to tracks, where ``pairs`` (k, 2) lists
-    (vehicle id, track id) once per step the two were within the match radius."""
+    (vehicle id, track id) once per step the two were within the match radius, or, with ``steps`` (k,), once with
+    that number of steps."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     if len(pairs) == 0:
         return 0
-    (o_ids, o_at), (h_ids, h_at) = (np.unique(pairs[:, c], return_inverse=True) for c in (0, 1))
-    key, counts = np.unique(o_at * len(h_ids) + h_at, return_counts=True)
-    oi, hj = key // len(h_ids), key % len(h_ids)
+    pairs, counts = _counted(pairs, np.ones(len(pairs), dtype=np.int64) if steps is None else np.asarray(steps))
+    (o_ids, oi), (h_ids, hj) = (np.unique(pairs[:, c], return_inverse=True) for c in (0, 1))
     no = len(o_ids)
-    graph = coo_matrix((np.ones(len(key)), (oi, no + hj)), shape=(no + len(h_ids),) * 2)
+    graph = coo_matrix((np.ones(len(oi)), (oi, no + hj)), shape=(no + len(h_ids),) * 2)
     _, label = connected_components(graph, directed=False)
     lone = np.bincount(label[oi])[label[oi]] == 1  # a cluster of one pair is that pair
     total = int(counts[lone].sum())
@@ -137,6 +144,14 @@ def identity_true_positives(pairs: np.ndarray) -> int:
         r, c = linear_sum_assignment(w, maximize=True)
         total += int(w[r, c].sum())
     return total
+
+
+def _counted(pairs: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``pairs`` (k, 2) and the sum of ``steps`` (k,) over each."""
+    if len(pairs) == 0:
+        return pairs.reshape(0, 2), np.zeros(0, dtype=np.int64)
+    rows, at = np.unique(pairs, axis=0, return_inverse=True)
+    return rows, np.bincount(at.reshape(-1), weights=steps, minlength=len(rows)).astype(np.int64)
 
 
 def _assignment(costs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

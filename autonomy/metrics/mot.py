@@ -123,7 +123,9 @@ class ClearMot:
         self._fed_truth = 0  # truth and track instances fed to it
         self._fed_tracks = 0
         self._gospa: list[float] = []
-        self._truth_ids: list[np.ndarray] = []  # per step fed: the vehicles present (fed to the matcher or not)
+        self._truth_ids: list[np.ndarray] = []  # per step fed since the last summary: the vehicles present
+        self._present = np.zeros(0, dtype=np.int64)  # the vehicles of earlier steps (fed to the matcher or not) ...
+        self._steps_present = np.zeros(0, dtype=np.int64)  # ... and the steps each was present
         self._unfed_truth = 0  # truth instances with no track within the radius: misses by construction
         self._unfed_tracks = 0  # track instances with no vehicle within the radius: false positives by construction
 
@@ -171,7 +173,11 @@ class ClearMot:
         false = m.false_positives + self._unfed_tracks
         predictions = self._fed_tracks + self._unfed_tracks
         switches = m.switches
-        present, steps_present = np.unique(np.concatenate(self._truth_ids), return_counts=True)
+        ids = np.concatenate((self._present, *self._truth_ids))
+        counts = np.concatenate((self._steps_present, np.ones(len(ids) - len(self._present), dtype=np.int64)))
+        present, at = np.unique(ids, return_inverse=True)  # folded: each summary costs what is new and who was seen
+        steps_present = np.bincount(at.reshape(-1), weights=counts, minlength=len(present)).astype(np.int64)
+        self._present, self._steps_present, self._truth_ids = present, steps_present, []
         tracked = m.tracked
         ratios = np.array([tracked.get(g, 0) for g in present.tolist()], dtype=float) / steps_present
         return MotSummary(steps=len(self._steps), match_radius_m=r,

@@ -28,6 +28,8 @@ from worlds.roads.network import RoadNetwork
 __all__: list[str] = []
 
 PHYSICS_HZ = 240
+CITY_REPEATS = 3
+"""Runs of each city world per benchmark, the median reported: single runs swing by ±20 % on a shared machine."""
 CARS = 200
 REPEATS = 3
 
@@ -100,8 +102,9 @@ def bench_traffic_car_tick() -> list[BenchRecord]:
 
 
 def _world_rtf(world: str, seconds: float) -> tuple[float, float]:
-    """(CPU, wall) real-time factor of ``seconds`` of a shipped world, from its first tick to the end of its run
-    directory (setup and plots left out; :func:`simulator.bench.scaling.loop_rtf`)."""
+    """Median (CPU, wall) real-time factor of :data:`CITY_REPEATS` runs of ``seconds`` of a shipped world, each from
+    its first tick to the end of its run directory (setup and plots left out;
+    :func:`simulator.bench.scaling.loop_rtf`)."""
     import yaml
 
     from simulator.bench.scaling import loop_rtf
@@ -109,17 +112,17 @@ def _world_rtf(world: str, seconds: float) -> tuple[float, float]:
 
     raw = yaml.safe_load(shipped_worlds()[world].read_text(encoding="utf-8"))
     raw["sim"]["duration_s"] = seconds
-    row = loop_rtf(raw)
-    return row["cpu_rtf"], row["rtf"]
+    rows = [loop_rtf(raw) for _ in range(CITY_REPEATS)]
+    return statistics.median(r["cpu_rtf"] for r in rows), statistics.median(r["rtf"] for r in rows)
 
 
 @benchmark("city_traffic", produces=("city_traffic_cpu_rtf_200cars", "city_traffic_rtf_200cars",
                                      "city_traffic_sumo_cpu_rtf_1000cars", "city_traffic_sumo_rtf_1000cars"))
 def bench_city_traffic() -> list[BenchRecord]:
-    """Closed-loop real-time factor (CPU time, setup and plots left out; wall twin beside it) of
-    helsinki_traffic_builtin (three radar UAVs with EKF and vector field tracking a physics car among 200 built-in
-    traffic cars, 30 s) and of helsinki_traffic (the same among 1000 SUMO vehicles, 20 s; left out when SUMO is not
-    installed)."""
+    """Closed-loop real-time factor (CPU time, setup and plots left out; wall twin beside it; the median of
+    :data:`CITY_REPEATS` runs) of helsinki_traffic_builtin (three radar UAVs with EKF and vector field tracking a
+    physics car among 200 built-in traffic cars, 30 s) and of helsinki_traffic (the same among 1000 SUMO vehicles,
+    20 s; left out when SUMO is not installed)."""
     cpu, wall = _world_rtf("helsinki_traffic_builtin", 30.0)
     out = [BenchRecord(name="city_traffic_cpu_rtf_200cars", value=cpu, unit="x", target=5.0, better="higher"),
            BenchRecord(name="city_traffic_rtf_200cars", value=wall, unit="x", better="higher")]

@@ -113,17 +113,20 @@ class ClearMotMatcher:
             self._met, self._met_steps = _counted(np.concatenate((self._met, new)),
                                                   np.concatenate((self._met_steps, np.ones(len(new), dtype=np.int64))))
             self._pairs = []
-        return identity_true_positives(self._met, self._met_steps)
+        return _best_total(self._met, self._met_steps)
 
 
-def identity_true_positives(pairs: np.ndarray, steps: np.ndarray | None = None) -> int:
+def identity_true_positives(pairs: np.ndarray) -> int:
     """The largest total count over one-to-one assignments of vehicles to tracks, where ``pairs`` (k, 2) lists
-    (vehicle id, track id) once per step the two were within the match radius, or, with ``steps`` (k,), once with
-    that number of steps."""
+    (vehicle id, track id) once per step the two were within the match radius."""
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    return _best_total(*_counted(pairs, np.ones(len(pairs), dtype=np.int64)))
+
+
+def _best_total(pairs: np.ndarray, counts: np.ndarray) -> int:
+    """:func:`identity_true_positives` of the distinct ``pairs`` (k, 2), each met on ``counts`` (k,) steps."""
     if len(pairs) == 0:
         return 0
-    pairs, counts = _counted(pairs, np.ones(len(pairs), dtype=np.int64) if steps is None else np.asarray(steps))
     (o_ids, oi), (h_ids, hj) = (np.unique(pairs[:, c], return_inverse=True) for c in (0, 1))
     no = len(o_ids)
     graph = coo_matrix((np.ones(len(oi)), (oi, no + hj)), shape=(no + len(h_ids),) * 2)

@@ -5,9 +5,12 @@ time and associates it with one's own. The teammates of a broadcast receive the 
 tick, so the prediction (:class:`~.track_fusion.PredictedEstimates`, the same numbers for every receiver) is made
 once and handed to each (:func:`track_set`): among 200 cars and 50 UAVs, predicting each picture 49 times was a third
 of the team's autonomy time. :func:`associate_sets` makes the pairs of
-:func:`~.track_association.associate_positions` from the pairs a k-d tree finds within the gate's reach (no pair
-farther apart than ``sqrt(χ² · (λ_a + λ_b))``, the λ the largest covariance eigenvalues of the two sets, is inside the
-gate) instead of the distance of every own track to every teammate track, and solves each connected component of the
+:func:`~.track_association.associate_positions` from the pairs k-d trees find within each track's reach instead of the
+distance of every own track to every teammate track: a pair inside the gate lies within ``sqrt(χ² (λ_a + λ_b))``,
+the λ the largest eigenvalues of the two tracks' covariances (``dᵀ(P_a + P_b)⁻¹d ≥ |d|² / (λ_a + λ_b)``), so within
+``sqrt(2 χ² λ)`` of whichever of the two has the larger λ; each tree is asked for the other set's tracks within that
+radius of each of its own (a radius per track: one new or coasting track with a covariance of hundreds of metres
+no longer widens the search for all), and solves each connected component of the
 gating graph alone with the tracker's compiled GNN kernels: with a cost ``big`` for a pair outside the gate, the
 dense assignment's cost is ``big · min(n, m) + Σ (c − big)`` over the gated pairs it makes (every partial matching
 extends to a full one with non-gated pairs), and with the same miss cost ``big`` for every track the least-cost
@@ -21,6 +24,7 @@ alone cannot tell (two tracks of a car that stopped and drove off, a radar track
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -82,8 +86,10 @@ class TrackSet:
         (n, 2, 2) their covariances (m²).
     p : np.ndarray
         (n,) target probabilities.
+    lam : np.ndarray
+        (n,) largest eigenvalue of each of ``P`` (m²).
     reach : float
-        Largest eigenvalue of any of ``P`` (m²), 0 for no track.
+        Largest of ``lam`` (m²), 0 for no track.
     """
 
     reports: list[TrackReport]
@@ -91,6 +97,7 @@ class TrackSet:
     xy: np.ndarray
     P: np.ndarray
     p: np.ndarray
+    lam: np.ndarray = field(default_factory=lambda: np.zeros(0))
     reach: float = 0.0
     _tree: cKDTree | None = field(default=None, repr=False)
 
@@ -109,7 +116,7 @@ class TrackSet:
         a, b, c = P[:, 0, 0], 0.5 * (P[:, 0, 1] + P[:, 1, 0]), P[:, 1, 1]
         lam = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b * b)
         return cls(reports=list(reports), est=est, xy=est.xy, P=P,
-                   p=np.array([r.target_probability for r in reports], dtype=float),
+                   p=np.array([r.target_probability for r in reports], dtype=float), lam=lam,
                    reach=float(lam.max()) if lam.size else 0.0)
 
 
@@ -140,22 +147,21 @@ def big_cost(threshold: float) -> float:
 
 def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int, int]]:
     """:func:`~.track_association.associate_positions` of the tracks of ``a`` and ``b`` (the same pairs, sorted),
-    gating only the pairs a k-d tree finds within the gate's reach, and solving each connected component of the
+    gating only the pairs the k-d trees find within each track's reach, and solving each connected component of the
     gating graph alone (module docstring)."""
     n, m = len(a.xy), len(b.xy)
     if not n or not m:
         return []
-    radius = math.sqrt(threshold * (a.reach + b.reach)) * (1.0 + 1e-9) + 1e-9
-    near = a.tree().sparse_distance_matrix(b.tree(), radius, output_type="ndarray")
-    i, j = near["i"].astype(np.int64), near["j"].astype(np.int64)
+    i_a, j_a = _within(b.tree(), a.xy, a.lam, threshold)  # b's tracks within the reach of each of a's
+    j_b, i_b = _within(a.tree(), b.xy, b.lam, threshold)  # and a's within the reach of each of b's
+    near = np.unique(np.concatenate((i_a * m + j_a, i_b * m + j_b)))  # each pair once, row-major (the kernels' order)
+    i, j = near // m, near % m
     d2 = mahalanobis2(a.xy[i], a.P[i], b.xy[j], b.P[j])
     keep = d2 <= threshold
     rows, cols = i[keep], j[keep]
     if not rows.size:
         return []
     cost = d2[keep] + identity_cost(a.p[rows], b.p[cols], max(n, m))
-    by = np.lexsort((cols, rows))  # row-major, as the assignment kernels take pairs
-    rows, cols, cost = rows[by], cols[by], cost[by]
     # with the same cost ``big`` for every own track left alone, the least-cost assignment with misses is the
     # assignment of least cost with ``big`` outside the gate: both make the gated matching of greatest Σ (big − c)
     miss = np.full(n, big_cost(threshold))
@@ -165,3 +171,13 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
                                                                m), miss) for h in hard]
     picked = np.concatenate(chosen).astype(np.int64)
     return sorted(zip(rows[picked].tolist(), cols[picked].tolist(), strict=True))
+
+
+def _within(tree: cKDTree, xy: np.ndarray, lam: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray]:
+    """(k, j) of every point j of ``tree`` within ``sqrt(2 · threshold · lam[k])`` of ``xy[k]`` (widened by a relative
+    1e-9 and 1e-9 m against round-off), as two int64 arrays."""
+    radius = np.sqrt(2.0 * threshold * lam) * (1.0 + 1e-9) + 1e-9
+    found = tree.query_ball_point(xy, radius)
+    counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+    j = np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
+    return np.repeat(np.arange(len(found), dtype=np.int64), counts), j

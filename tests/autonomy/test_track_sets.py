@@ -138,3 +138,29 @@ def test_two_target_tracks_pair_where_the_positions_alone_would_cross_them():
         t=10.0, tracks=tuple(mate), target_track_id=18)])
     assert team.own_track_id == 19 and team.fused_with == 1
     assert np.hypot(*(team.estimate.p_W - [-3.0, 8.0])) < 0.5
+
+
+def test_tracks_of_very_different_sizes_are_searched_each_within_its_own_reach():
+    """A few new or coasting tracks with covariances of hundreds of metres among converged ones of a few metres (what
+    a teammate's picture of a city holds): each pair is searched within the reach of the larger of its two tracks, and
+    the pairs are still those of the whole assignment, the large tracks' distant pairs among them."""
+    rng = np.random.default_rng(21)
+    compared = wide = 0
+    for _ in range(600):
+        n, m = rng.integers(1, 60, 2)
+        cars = rng.uniform(-400.0, 400.0, (max(n, m) + 5, 2))
+        a = _set(rng, cars[rng.choice(len(cars), n, replace=False)] + rng.normal(0, 3, (n, 2)), 9.0)
+        b = _set(rng, cars[rng.choice(len(cars), m, replace=False)] + rng.normal(0, 3, (m, 2)), 9.0)
+        for s in (a, b):  # a tenth of each set made wide, long along a random axis
+            for k in np.flatnonzero(rng.random(len(s.xy)) < 0.1):
+                u = rng.normal(size=2)
+                u /= np.linalg.norm(u)
+                s.P[k] = rng.uniform(200.0, 4000.0) * np.outer(u, u) + rng.uniform(1.0, 9.0) * np.eye(2)
+            P = s.P
+            s.lam = 0.5 * (P[:, 0, 0] + P[:, 1, 1]) + np.sqrt(0.25 * (P[:, 0, 0] - P[:, 1, 1]) ** 2 + P[:, 0, 1] ** 2)
+        want = _whole_assignment(a.xy, a.P, b.xy, b.P, CHI2_2_999)
+        assert associate_sets(a, b, CHI2_2_999) == want
+        compared += len(want)
+        d = np.hypot(*(a.xy[:, None] - b.xy[None]).T).T
+        wide += sum(d[i, j] ** 2 > CHI2_2_999 * max(a.lam[i], b.lam[j]) for i, j in want)
+    assert compared > 5_000 and wide > 20  # pairs a search within one track's own reach alone would have missed

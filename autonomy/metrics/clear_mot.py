@@ -153,8 +153,10 @@ def _counted(pairs: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, np.ndarr
     """The distinct rows of ``pairs`` (k, 2) and the sum of ``steps`` (k,) over each."""
     if len(pairs) == 0:
         return pairs.reshape(0, 2), np.zeros(0, dtype=np.int64)
-    rows, at = np.unique(pairs, axis=0, return_inverse=True)
-    return rows, np.bincount(at.reshape(-1), weights=steps, minlength=len(rows)).astype(np.int64)
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))  # the rows np.unique(axis=0) gives, a tenth of its time
+    p, st = pairs[order], np.asarray(steps, dtype=np.int64)[order]
+    starts = np.flatnonzero(np.r_[True, (p[1:, 0] != p[:-1, 0]) | (p[1:, 1] != p[:-1, 1])])
+    return p[starts], np.add.reduceat(st, starts)
 
 
 def _assignment(costs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

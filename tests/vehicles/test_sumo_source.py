@@ -188,6 +188,10 @@ def test_sync_near_places_exactly_the_bodies_near_the_points(client, work_dir) -
             tr.sync_near(tick, pts, 40.0)
             ps = tr.poses(tick)
             np.testing.assert_array_equal(ps.xy, ref.xy)
+            some = np.flatnonzero(ps.active)[::3]  # a pose's position and heading alone, as sync_near reads them
+            xy, yaw = tr._slots.positions((tick - tr._t_prev) / PERIOD, some)
+            np.testing.assert_array_equal(xy, ref.xy[some])
+            np.testing.assert_array_equal(yaw, ref.yaw[some])
             near = ps.active & (((ps.xy[:, None, :] - pts[None]) ** 2).sum(axis=2).min(axis=1) <= 40.0 ** 2)
             for k, b in enumerate(tr.body_ids):
                 pos, q = p.getBasePositionAndOrientation(int(b), physicsClientId=client)

@@ -100,22 +100,15 @@ class SlotStates:
         (``step_dt``: the step length, s); of the slots ``idx`` only, in that order, if given (the same numbers as
         their rows of every slot's poses)."""
         sel = slice(None) if idx is None else idx
-        xy0, xy1, yaw0, yaw1 = self.xy[0, sel], self.xy[1, sel], self.yaw[0, sel], self.yaw[1, sel]
         same = self._same[sel]
-        d = yaw1 - yaw0
-        dyaw = np.arctan2(np.sin(d), np.cos(d))
+        xy, yaw, dyaw, a = self._xy_yaw(alpha, sel)
         if alpha >= 1.0:
-            xy, yaw, speed, on = xy1.copy(), yaw1.copy(), self.speed[1, sel].copy(), self.on[1, sel].copy()
-            yaw_rate = np.where(same, dyaw, 0.0) / step_dt
+            speed, on = self.speed[1, sel].copy(), self.on[1, sel].copy()
         else:
-            a = np.where(same, alpha, 0.0)
-            xy = xy0 + a[:, None] * (xy1 - xy0)
-            yaw = yaw0 + a * dyaw
             sp0 = self.speed[0, sel]
             speed = sp0 + a * (self.speed[1, sel] - sp0)
             on = self.on[0, sel].copy()
-            yaw_rate = np.where(same, dyaw, 0.0) / step_dt
-        yaw = np.arctan2(np.sin(yaw), np.cos(yaw))
+        yaw_rate = np.where(same, dyaw, 0.0) / step_dt
         speed = np.where(on, speed, 0.0)
         yaw_rate = np.where(on, yaw_rate, 0.0)
         c, s = np.cos(yaw), np.sin(yaw)
@@ -126,6 +119,27 @@ class SlotStates:
         a_xy = np.stack([accel * c - speed * yaw_rate * s, accel * s + speed * yaw_rate * c], axis=1)
         return TrafficPoses(tick=tick, xy=xy, yaw=yaw, speed=speed, v_xy=v_xy, yaw_rate=yaw_rate, active=on,
                             a_xy=a_xy)
+
+    def positions(self, alpha: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(xy (k, 2), yaw (k,)) of the slots ``idx`` at ``alpha``: the :meth:`poses` ``xy`` and ``yaw`` of those
+        rows (the same numbers), without the rest of a pose."""
+        xy, yaw, _, _ = self._xy_yaw(alpha, idx)
+        return xy, yaw
+
+    def _xy_yaw(self, alpha: float, sel: slice | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                        np.ndarray | None]:
+        """Positions and wrapped headings of the slots ``sel`` at ``alpha``, the step's wrapped change of heading and
+        the per-slot fraction (``None`` at ``alpha`` >= 1) of the interpolation."""
+        xy0, xy1, yaw0, yaw1 = self.xy[0, sel], self.xy[1, sel], self.yaw[0, sel], self.yaw[1, sel]
+        d = yaw1 - yaw0
+        dyaw = np.arctan2(np.sin(d), np.cos(d))
+        if alpha >= 1.0:
+            xy, yaw, a = xy1.copy(), yaw1.copy(), None
+        else:
+            a = np.where(self._same[sel], alpha, 0.0)
+            xy = xy0 + a[:, None] * (xy1 - xy0)
+            yaw = yaw0 + a * dyaw
+        return xy, np.arctan2(np.sin(yaw), np.cos(yaw)), dyaw, a
 
     def active_at(self, alpha: float) -> np.ndarray:
         """Which slots hold a vehicle on the road at ``alpha`` (the ``active`` of :meth:`poses`), without poses."""

@@ -369,8 +369,9 @@ class SumoTraffic:
         """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``.
 
         Asked before every physics step: the slots whose disc of the step (:meth:`SlotStates.reach`, found through a
-        k-d tree of the discs made once per step) comes within ``radius`` are the only ones posed (the same numbers as
-        their rows of :meth:`poses`); the others cannot be that near at any tick of the step."""
+        k-d tree of the discs made once per step) comes within ``radius`` are the only ones posed, position and
+        heading alone (:meth:`SlotStates.positions`: the same numbers as their rows of :meth:`poses`); the others
+        cannot be that near at any tick of the step."""
         pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
         if not len(pts):
             return
@@ -392,10 +393,10 @@ class SumoTraffic:
             c2 = _nearest_d2(centre[cand], pts)
             cand = cand[self._slots.active_at(alpha)[cand] & (c2 <= (radius + reach[cand]) ** 2)]
         if len(cand):
-            sub = self._slots.poses(tick, alpha, self.config.period / self.config.physics_hz, idx=cand)
-            d2 = _nearest_d2(sub.xy, pts)
+            xy, yaw = self._slots.positions(alpha, cand)
+            d2 = _nearest_d2(xy, pts)
             keep = (d2 <= radius * radius) & (self._placed[cand] != tick)
-            self._place(tick, cand[keep], sub.xy[keep], sub.yaw[keep])
+            self._place(tick, cand[keep], xy[keep], yaw[keep])
         self._park(self._slots.active_at(alpha))
 
     def _sync(self, tick: int, want: np.ndarray) -> None:

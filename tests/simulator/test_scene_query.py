@@ -142,3 +142,32 @@ def test_egl_probe_fails_gracefully_and_egl_renders_when_loaded():
     # a 2 m box at 10 m straight ahead covers the image centre: about (2 f / 10)^2 pixels
     f = 16 / np.tan(0.5)
     assert int(pixels) == pytest.approx((2 * f / 10) ** 2, rel=0.35)
+
+
+def test_a_ray_into_a_car_is_cast_twice_and_finds_a_building_close_behind_it(town):
+    """A ray that meets a car is cast again from 1 cm past the hit (Bullet reports a ray starting a millimetre or two
+    inside a box as meeting it again at its start): a segment ending at a car's centre costs two casts, not three,
+    and a building 5 cm behind the car's far side still blocks a segment that runs through the car into it."""
+    cid, sq = town
+    rng = np.random.default_rng(3)
+    centres = np.column_stack([rng.uniform(-150, 150, 40), rng.uniform(100, 300, 40), np.full(40, 0.75)])
+    for c in centres:
+        add_box(cid, c, [2.4, 0.9, 0.75], yaw=rng.uniform(-np.pi, np.pi))
+    n = 400
+    ends = centres[rng.integers(0, 40, n)]
+    elev, az = rng.uniform(0.1, 1.5, n), rng.uniform(-np.pi, np.pi, n)
+    starts = ends + rng.uniform(20, 300, n)[:, None] * np.column_stack([np.cos(elev) * np.cos(az),
+                                                                        np.cos(elev) * np.sin(az), np.sin(elev)])
+    met = np.array([p.rayTest(a.tolist(), b.tolist(), physicsClientId=cid)[0][0]
+                    for a, b in zip(starts, ends, strict=True)])
+    starts, ends = starts[met >= 0], ends[met >= 0]  # the rays that meet the car they end in (no other in between)
+    before = sq.rays_cast
+    assert sq.line_of_sight(starts, ends).all()
+    assert len(starts) > 300 and sq.rays_cast - before <= 2.02 * len(starts)
+    car = add_box(cid, [200.0, 0.0, 0.75], [2.4, 0.9, 0.75])
+    wall = add_box(cid, [205.0 - 2.4 - 0.05 + 0.5, 0.0, 5.0], [0.5, 10.0, 5.0])  # its face 5 cm past the car's
+    blocked = PybulletSceneQuery(cid, sq.occluder_body_ids | {wall})
+    assert car not in blocked.occluder_body_ids
+    out = blocked.line_of_sight(np.array([[150.0, 0.0, 0.75], [150.0, 0.0, 0.75]]),
+                                np.array([[205.0, 0.0, 0.75], [199.0, 0.0, 0.75]]))
+    np.testing.assert_array_equal(out, [False, True])

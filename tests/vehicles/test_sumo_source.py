@@ -174,17 +174,18 @@ def test_sync_places_bodies_exactly_and_parks_inactive_slots(client, work_dir) -
 @needs_sumo
 def test_sync_near_places_exactly_the_bodies_near_the_points(client, work_dir) -> None:
     """Before the poses of a tick are asked (as before a physics step), sync_near poses only the slots whose step
-    can bring them near; the bodies it places are where poses() then says, and it places every active slot within
-    the radius and no other, at every tick of four SUMO steps."""
+    can bring them near the points; the bodies it places are where poses() then says, it places every active slot
+    within the radius at every tick of four SUMO steps, and leaves the bodies far from the points where they were,
+    also when the points move on (the candidates are found again when a point has moved 10 m)."""
     with _traffic(_grid(), client, work_dir, n_vehicles=20, n_slots=24) as tr:
         for tick in range(1, 4 * PERIOD + 1):
             tr.advance(tick, OtherCars.none())
-        placed = left = 0
+        placed = left = extra = 0
         for tick in range(4 * PERIOD + 1, 8 * PERIOD + 1):
             tr.advance(tick, OtherCars.none())
             before = [p.getBasePositionAndOrientation(int(b), physicsClientId=client) for b in tr.body_ids]
             ref = tr._slots.poses(tick, (tick - tr._t_prev) / PERIOD, 1.0 / RATE_HZ)  # not through the cache
-            pts = ref.xy[[0, 5]] + [10.0, 0.0]
+            pts = ref.xy[[0, 5]] + [10.0, 0.0] + [1.5 * (tick - 4 * PERIOD), 0.0]  # the points fly on east
             tr.sync_near(tick, pts, 40.0)
             ps = tr.poses(tick)
             np.testing.assert_array_equal(ps.xy, ref.xy)
@@ -195,14 +196,16 @@ def test_sync_near_places_exactly_the_bodies_near_the_points(client, work_dir) -
             near = ps.active & (((ps.xy[:, None, :] - pts[None]) ** 2).sum(axis=2).min(axis=1) <= 40.0 ** 2)
             for k, b in enumerate(tr.body_ids):
                 pos, q = p.getBasePositionAndOrientation(int(b), physicsClientId=client)
-                if near[k]:
-                    assert pos == (ps.xy[k, 0], ps.xy[k, 1], tr.ground_z[k])
+                moved = (pos, q) != before[k]
+                if near[k] or moved:  # every one near, and any other placed is placed exactly too
+                    assert ps.active[k] and pos == (ps.xy[k, 0], ps.xy[k, 1], tr.ground_z[k])
                     assert abs(np.dot(q, yaw_quaternion(float(ps.yaw[k])))) == pytest.approx(1.0, abs=1e-12)
-                    placed += 1
-                elif ps.active[k]:
-                    assert (pos, q) == before[k]
+                    placed += near[k]
+                    extra += moved and not near[k]
+                if ps.active[k] and (((ps.xy[k] - pts) ** 2).sum(axis=1).min() > (40.0 + 10.0 + 2 * 20.0) ** 2):
+                    assert (pos, q) == before[k]  # beyond radius, margin and two steps' moves: never placed
                     left += 1
-        assert placed > 4 * PERIOD and left > 4 * PERIOD
+        assert placed > 4 * PERIOD and left > 4 * PERIOD and extra < placed
 
 
 @needs_sumo

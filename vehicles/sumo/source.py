@@ -28,7 +28,6 @@ from pathlib import Path
 
 import numpy as np
 import pybullet as p
-from scipy.spatial import cKDTree
 
 from vehicles.car.box_body import CarBoxBody
 from vehicles.car.params import CarParams, load_car
@@ -48,7 +47,7 @@ _STOPPED_SPEED = 0.1  # m/s; a slot slower than this is reported stopped
 _NO_STATE = {0x42: (0.0, 0.0), 0x43: 0.0, 0x40: 0.0, 0x50: ""}  # a vehicle SUMO has no state for (teleporting)
 _active: SumoTraffic | None = None  # the one libsumo simulation of this process
 
-_SHORT_REACH = 50.0  # m; slots moving less in a step are found through a k-d tree in sync_near, the others always
+_NEAR_MARGIN = 10.0  # m; sync_near's candidates hold while no point has moved farther than this from where it was
 
 
 def _nearest_d2(xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -170,7 +169,7 @@ class SumoTraffic:
         self._physics_live: set[str] = set()  # those SUMO has now
         self._physics_routes = 0
         self._pose_cache: TrafficPoses | None = None
-        self._reach: tuple | None = None  # SlotStates.reach of the current step and its k-d tree (see sync_near)
+        self._near: tuple | None = None  # sync_near's candidates: (SUMO step, points, radius, slots)
         self._closed = False
         self._start(seed)
         _active = self
@@ -282,7 +281,7 @@ class SumoTraffic:
             self._trips.add(arrived)
         self._read_states()
         self._pose_cache = None
-        self._reach = None
+        self._near = None
 
     def _read_states(self) -> None:
         """Every occupied slot's state at the step just taken, from the vehicles' subscriptions (plain lists: this
@@ -366,38 +365,33 @@ class SumoTraffic:
         self._sync(tick, np.ones(self.config.n_slots, dtype=bool))
 
     def sync_near(self, tick: int, points_xy: np.ndarray, radius: float) -> None:
-        """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``.
+        """Place the bodies of the slots within ``radius`` (m) of any of ``points_xy`` (K, 2) at ``tick``, and maybe
+        of a few more (each at its pose of ``tick``).
 
-        Asked before every physics step: the slots whose disc of the step (:meth:`SlotStates.reach`, found through a
-        k-d tree of the discs made once per step) comes within ``radius`` are the only ones posed, position and
-        heading alone (:meth:`SlotStates.positions`: the same numbers as their rows of :meth:`poses`); the others
-        cannot be that near at any tick of the step."""
+        Asked before every physics step. The candidates are found once per SUMO step and set of points: the slots
+        whose disc of the step (:meth:`SlotStates.reach`, which holds the slot at every tick of the step) comes within
+        ``radius`` + :data:`_NEAR_MARGIN` of a point. They hold while no point is farther than the margin from where it
+        was then (a slot within ``radius`` of a point is within ``radius`` + margin of where the point was); else they
+        are found again. At each tick the candidates on the road are posed, position and heading alone
+        (:meth:`SlotStates.positions`: the same numbers as their rows of :meth:`poses`), and placed."""
         pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
         if not len(pts):
             return
-        if self._pose_cache is not None and self._pose_cache.tick == tick:
-            ps = self._pose_cache
-            d2 = _nearest_d2(ps.xy, pts)
-            self._sync(tick, d2 <= radius * radius)
-            return
-        if self._reach is None:  # a tree of the discs of a step's usual moves; the few long jumps checked each time
+        near = self._near
+        if (near is None or near[0] != self._t_next or near[1].shape != pts.shape or near[2] != radius
+                or float(((pts - near[1]) ** 2).sum(axis=1).max()) > _NEAR_MARGIN ** 2):
             centre, reach = self._slots.reach()
-            short = np.flatnonzero(reach <= _SHORT_REACH)
-            self._reach = (centre, reach, cKDTree(centre[short]) if len(short) else None, short,
-                           np.flatnonzero(reach > _SHORT_REACH))
-        centre, reach, tree, short, far = self._reach
+            d2 = _nearest_d2(centre, pts)
+            near = self._near = (self._t_next, pts.copy(), radius,
+                                 np.flatnonzero(d2 <= (radius + _NEAR_MARGIN + reach) ** 2))
         alpha = (tick - self._t_prev) / self.config.period
-        near = tree.query_ball_point(pts, radius + _SHORT_REACH) if tree is not None else []
-        cand = np.union1d(short[np.fromiter((k for ks in near for k in ks), dtype=np.int64)], far)
-        if len(cand):
-            c2 = _nearest_d2(centre[cand], pts)
-            cand = cand[self._slots.active_at(alpha)[cand] & (c2 <= (radius + reach[cand]) ** 2)]
+        active = self._slots.active_at(alpha)
+        cand = near[3]
+        cand = cand[active[cand] & (self._placed[cand] != tick)]
         if len(cand):
             xy, yaw = self._slots.positions(alpha, cand)
-            d2 = _nearest_d2(xy, pts)
-            keep = (d2 <= radius * radius) & (self._placed[cand] != tick)
-            self._place(tick, cand[keep], xy[keep], yaw[keep])
-        self._park(self._slots.active_at(alpha))
+            self._place(tick, cand, xy, yaw)
+        self._park(active)
 
     def _sync(self, tick: int, want: np.ndarray) -> None:
         ps = self.poses(tick)

@@ -7,6 +7,7 @@ centre-line (the dividing line), each with its lanes on its own right.
 from __future__ import annotations
 
 import heapq
+import itertools
 import weakref
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -221,13 +222,19 @@ class RoadNetwork:
         tree, owner = self._search_index()
         d0, _ = tree.query(pts)
         near = tree.query_ball_point(pts, d0 + _SEARCH_SPACING / 2 + 1e-9)
-        cands = [sorted(set(owner[c].tolist())) for c in near]
-        point_of = np.repeat(np.arange(len(pts)), [len(c) for c in cands])
-        road_of = np.fromiter((k for c in cands for k in c), dtype=np.int64, count=len(point_of))
+        counts = np.fromiter(map(len, near), dtype=np.int64, count=len(near))
+        sample = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(counts.sum()))
+        n_roads = len(self._ids)
+        pair = np.unique(np.repeat(np.arange(len(pts), dtype=np.int64), counts) * n_roads + owner[sample])
+        point_of, road_of = pair // n_roads, pair % n_roads  # each point's candidate roads once, in index order
         s, lat, dist = project_pairs(self._road_tables(), road_of, pts[point_of])
+        # only a road within 2 µm of a point's nearest can tie it at the micrometre: |round(d, 6) - d| <= 0.5 µm
+        least = np.full(len(pts), np.inf)
+        np.minimum.at(least, point_of, dist)
+        close = np.flatnonzero(dist <= least[point_of] + 2e-6)
         best: list[tuple | None] = [None] * len(pts)
-        for i, k, si, li, di in zip(point_of.tolist(), road_of.tolist(), s.tolist(), lat.tolist(), dist.tolist(),
-                                    strict=True):
+        for i, k, si, li, di in zip(point_of[close].tolist(), road_of[close].tolist(), s[close].tolist(),
+                                    lat[close].tolist(), dist[close].tolist(), strict=True):
             key = (round(di, 6), 0 if li <= 0 else 1, self._ids[k], si, li)
             if best[i] is None or key[:3] < best[i][:3]:
                 best[i] = key

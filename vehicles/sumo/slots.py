@@ -47,6 +47,7 @@ class SlotStates:
         self.on = np.zeros((2, n), dtype=bool)
         self.road = [[""] * n, [""] * n]
         self._same = np.zeros(n, dtype=bool)
+        self._lerp: tuple | None = None  # positions()' gathered states of its last slots in this step
 
     # ------------------------------------------------------------------ vehicles in and out
     def slot_of(self, vehicle_id: str) -> int | None:
@@ -77,6 +78,7 @@ class SlotStates:
     def begin_step(self) -> None:
         """The state at the next step becomes the previous one (call before the simulator steps)."""
         self._prev_vehicle = list(self.vehicle)
+        self._lerp = None
         self.xy[0], self.yaw[0], self.speed[0], self.on[0] = self.xy[1], self.yaw[1], self.speed[1], self.on[1]
         self.road[0] = list(self.road[1])
 
@@ -93,6 +95,7 @@ class SlotStates:
         pairs = zip(self._prev_vehicle, self.vehicle, strict=True)
         same = np.array([a is not None and a == b for a, b in pairs], dtype=bool)
         self._same = same & self.on[0] & self.on[1]
+        self._lerp = None
 
     # ------------------------------------------------------------------ poses
     def poses(self, tick: int, alpha: float, step_dt: float, idx: np.ndarray | None = None) -> TrafficPoses:
@@ -122,9 +125,22 @@ class SlotStates:
 
     def positions(self, alpha: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(xy (k, 2), yaw (k,)) of the slots ``idx`` at ``alpha``: the :meth:`poses` ``xy`` and ``yaw`` of those
-        rows (the same numbers), without the rest of a pose."""
-        xy, yaw, _, _ = self._xy_yaw(alpha, idx)
-        return xy, yaw
+        rows (the same numbers), without the rest of a pose. Asked again for the same ``idx`` (the same array, not
+        changed since) within a step, the slots' states at both ends and the step's changes are taken from the first
+        time (the same numbers again: ``x0 + a (x1 - x0)`` with ``x1 - x0`` made once)."""
+        if alpha >= 1.0:
+            xy, yaw, _, _ = self._xy_yaw(alpha, idx)
+            return xy, yaw
+        lerp = self._lerp
+        if lerp is None or lerp[0] is not idx:
+            xy0, yaw0 = self.xy[0, idx], self.yaw[0, idx]
+            d = self.yaw[1, idx] - yaw0
+            lerp = self._lerp = (idx, xy0, self.xy[1, idx] - xy0, yaw0, np.arctan2(np.sin(d), np.cos(d)),
+                                 self._same[idx])
+        _, xy0, dxy, yaw0, dyaw, same = lerp
+        a = np.where(same, alpha, 0.0)
+        yaw = yaw0 + a * dyaw
+        return xy0 + a[:, None] * dxy, np.arctan2(np.sin(yaw), np.cos(yaw))
 
     def _xy_yaw(self, alpha: float, sel: slice | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                                         np.ndarray | None]:

@@ -170,6 +170,7 @@ class SumoTraffic:
         self._physics_routes = 0
         self._pose_cache: TrafficPoses | None = None
         self._near: tuple | None = None  # sync_near's candidates: (SUMO step, points, radius, slots)
+        self._parked: tuple | None = None  # the state of the slots (see _park) whose bodies off the road are parked
         self._closed = False
         self._start(seed)
         _active = self
@@ -379,7 +380,7 @@ class SumoTraffic:
             return
         near = self._near
         if (near is None or near[0] != self._t_next or near[1].shape != pts.shape or near[2] != radius
-                or float(((pts - near[1]) ** 2).sum(axis=1).max()) > _NEAR_MARGIN ** 2):
+                or max(math.dist(a, b) for a, b in zip(pts.tolist(), near[1].tolist(), strict=True)) > _NEAR_MARGIN):
             centre, reach = self._slots.reach()
             d2 = _nearest_d2(centre, pts)
             near = self._near = (self._t_next, pts.copy(), radius,
@@ -387,18 +388,19 @@ class SumoTraffic:
         alpha = (tick - self._t_prev) / self.config.period
         active = self._slots.active_at(alpha)
         cand = near[3]
-        cand = cand[active[cand] & (self._placed[cand] != tick)]
         if len(cand):
-            xy, yaw = self._slots.positions(alpha, cand)
-            self._place(tick, cand, xy, yaw)
-        self._park(active)
+            due = active[cand] & (self._placed[cand] != tick)
+            if due.any():
+                xy, yaw = self._slots.positions(alpha, cand)  # the same candidates every tick of the step
+                self._place(tick, cand[due], xy[due], yaw[due])
+        self._park(active, alpha)
 
     def _sync(self, tick: int, want: np.ndarray) -> None:
         ps = self.poses(tick)
         place = np.flatnonzero(want & ps.active & (self._placed != tick))
         if len(place):
             self._place(tick, place, ps.xy[place], ps.yaw[place])
-        self._park(ps.active)
+        self._park(ps.active, (tick - self._t_prev) / self.config.period)
 
     def _place(self, tick: int, place: np.ndarray, xy: np.ndarray, yaw: np.ndarray) -> None:
         """Bodies of the slots ``place`` to positions ``xy`` and headings ``yaw`` (their poses at ``tick``)."""
@@ -411,8 +413,14 @@ class SumoTraffic:
             reset(b, (x, y, bz), (0.0, 0.0, sz, cw), physicsClientId=cid)
         self._placed[place] = tick
 
-    def _park(self, active: np.ndarray) -> None:
-        """Park the bodies of the slots no longer on the road."""
+    def _park(self, active: np.ndarray, alpha: float) -> None:
+        """Park the bodies of the slots no longer on the road (``active``: :meth:`SlotStates.active_at` ``alpha``).
+        Once per state of the slots: which are on the road changes only with a step or at its end (``alpha`` 1), and
+        meanwhile only slots on the road are placed."""
+        key = (self._t_next, alpha >= 1.0)
+        if self._parked == key:
+            return
+        self._parked = key
         cid, z = self.client_id, self.config.park_z
         park = np.flatnonzero(~active & (self._placed >= 0))
         for k in park.tolist():

@@ -272,13 +272,16 @@ class TrafficFleet:
 
     # ---------------------------------------------------------------------------------------------- the scene
     def _place(self, idx: np.ndarray, tick: int) -> None:
-        r = self._rows(tick)
-        for i in idx:
-            i = int(i)
-            x, y, yaw = float(r[i, R_X]), float(r[i, R_Y]), float(r[i, R_YAW])
-            self.boxes[i].place(x, y, yaw_quaternion(yaw))
-            self._box_xy[i] = (x, y)
-            self._placed[i] = tick
+        idx = np.asarray(idx, dtype=np.int64)
+        if not len(idx):
+            return
+        rows = self._rows(tick)[idx]
+        boxes = self.boxes
+        for i, x, y, yaw in zip(idx.tolist(), rows[:, R_X].tolist(), rows[:, R_Y].tolist(), rows[:, R_YAW].tolist(),
+                                strict=True):
+            boxes[i].place(x, y, yaw_quaternion(yaw))
+        self._box_xy[idx] = rows[:, [R_X, R_Y]]
+        self._placed[idx] = tick
 
     def sync_scene(self, tick: int) -> None:
         self._place(np.flatnonzero(self._placed != tick), tick)

@@ -86,8 +86,8 @@ class PredictedEstimates(Sequence[TargetEstimate]):
 
     The 2-D estimates with a covariance and a time other than ``t`` are predicted together, their covariances in one
     stacked product: the same numbers as one at a time (the stacked matrix product multiplies slice by slice as the
-    single one does, each Q is built in the same float operations, and ``p + Δt·v`` is the same elementwise
-    arithmetic); the others (none or one such estimate, no covariance, 3-D, already at ``t``) one at a time.
+    single one does, each Q is built in the same float operations, once per distinct Δt, and ``p + Δt·v`` is the same
+    elementwise arithmetic); the others (none or one such estimate, no covariance, 3-D, already at ``t``) one at a time.
     """
 
     def __init__(self, ests: Sequence[TargetEstimate], t: float, q: float) -> None:
@@ -104,11 +104,11 @@ class PredictedEstimates(Sequence[TargetEstimate]):
             F = np.tile(np.eye(4), (len(todo), 1, 1))
             F[:, 0, 2] = F[:, 1, 3] = dts
             Q = np.zeros((len(todo), 4, 4))
-            for m, dt in enumerate(dts):
-                a, b, c = abs(dt) ** 3 / 3 * q, dt ** 2 / 2 * q, abs(dt) * q
-                Q[m, 0, 0] = Q[m, 1, 1] = a
-                Q[m, 0, 2] = Q[m, 1, 3] = Q[m, 2, 0] = Q[m, 3, 1] = b
-                Q[m, 2, 2] = Q[m, 3, 3] = c
+            steps, at = np.unique(dts, return_inverse=True)  # a picture's tracks share a few update times
+            terms = np.array([(abs(dt) ** 3 / 3 * q, dt ** 2 / 2 * q, abs(dt) * q) for dt in steps.tolist()])[at]
+            Q[:, 0, 0] = Q[:, 1, 1] = terms[:, 0]
+            Q[:, 0, 2] = Q[:, 1, 3] = Q[:, 2, 0] = Q[:, 3, 1] = terms[:, 1]
+            Q[:, 2, 2] = Q[:, 3, 3] = terms[:, 2]
             self._P = F @ np.stack([self._ests[k].P for k in todo]) @ F.transpose(0, 2, 1) + Q
             self._p = (np.stack([self._ests[k].p_W for k in todo])
                        + np.array(dts)[:, None] * np.stack([self._ests[k].v_W for k in todo]))

@@ -65,8 +65,9 @@ def test_predicting_many_estimates_at_once_gives_each_ones_numbers_bit_for_bit()
     for k in range(40):
         a = rng.normal(size=(4, 4))
         P = a @ a.T + np.eye(4)
-        ests.append(TargetEstimate(t=float(rng.uniform(0, 10)), p_W=rng.normal(size=2) * 100,
-                                   v_W=rng.normal(size=2) * 10, P=P if k % 7 else None))
+        t = float(rng.uniform(0, 10)) if k % 2 else float(rng.choice([9.5, 10.0, 11.25]))  # some share a time
+        ests.append(TargetEstimate(t=t, p_W=rng.normal(size=2) * 100, v_W=rng.normal(size=2) * 10,
+                                   P=P if k % 7 else None))
     ests.append(TargetEstimate(t=12.5, p_W=np.zeros(2), v_W=np.ones(2), P=np.eye(4)))  # dt = 0: itself
     batch = predict_estimates(ests, 12.5, 0.7)
     for e, b in zip(ests, batch, strict=True):

@@ -126,36 +126,40 @@ class SlotStates:
     def positions(self, alpha: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(xy (k, 2), yaw (k,)) of the slots ``idx`` at ``alpha``: the :meth:`poses` ``xy`` and ``yaw`` of those
         rows (the same numbers), without the rest of a pose. Asked again for the same ``idx`` (the same array, not
-        changed since) within a step, the slots' states at both ends and the step's changes are taken from the first
-        time (the same numbers again: ``x0 + a (x1 - x0)`` with ``x1 - x0`` made once)."""
+        changed since) within a step, the slots' states and the step's changes are those gathered the first time."""
         if alpha >= 1.0:
             xy, yaw, _, _ = self._xy_yaw(alpha, idx)
             return xy, yaw
-        lerp = self._lerp
-        if lerp is None or lerp[0] is not idx:
-            xy0, yaw0 = self.xy[0, idx], self.yaw[0, idx]
-            d = self.yaw[1, idx] - yaw0
-            lerp = self._lerp = (idx, xy0, self.xy[1, idx] - xy0, yaw0, np.arctan2(np.sin(d), np.cos(d)),
-                                 self._same[idx])
-        _, xy0, dxy, yaw0, dyaw, same = lerp
+        if self._lerp is None or self._lerp[0] is not idx:
+            self._lerp = (idx, self._terms(idx))
+        xy, yaw, _ = self._lerp_at(self._lerp[1], alpha)
+        return xy, yaw
+
+    def _terms(self, sel: slice | np.ndarray) -> tuple[np.ndarray, ...]:
+        """Of the slots ``sel``: positions and headings at the previous step, their changes over the step (the heading's
+        wrapped) and whether each holds one vehicle on the road at both steps."""
+        xy0, yaw0 = self.xy[0, sel], self.yaw[0, sel]
+        d = self.yaw[1, sel] - yaw0
+        return xy0, self.xy[1, sel] - xy0, yaw0, np.arctan2(np.sin(d), np.cos(d)), self._same[sel]
+
+    @staticmethod
+    def _lerp_at(terms: tuple[np.ndarray, ...], alpha: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions, wrapped headings and per-slot fractions at ``alpha`` < 1 from :meth:`_terms`."""
+        xy0, dxy, yaw0, dyaw, same = terms
         a = np.where(same, alpha, 0.0)
         yaw = yaw0 + a * dyaw
-        return xy0 + a[:, None] * dxy, np.arctan2(np.sin(yaw), np.cos(yaw))
+        return xy0 + a[:, None] * dxy, np.arctan2(np.sin(yaw), np.cos(yaw)), a
 
     def _xy_yaw(self, alpha: float, sel: slice | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                                         np.ndarray | None]:
         """Positions and wrapped headings of the slots ``sel`` at ``alpha``, the step's wrapped change of heading and
         the per-slot fraction (``None`` at ``alpha`` >= 1) of the interpolation."""
-        xy0, xy1, yaw0, yaw1 = self.xy[0, sel], self.xy[1, sel], self.yaw[0, sel], self.yaw[1, sel]
-        d = yaw1 - yaw0
-        dyaw = np.arctan2(np.sin(d), np.cos(d))
+        terms = self._terms(sel)
         if alpha >= 1.0:
-            xy, yaw, a = xy1.copy(), yaw1.copy(), None
-        else:
-            a = np.where(self._same[sel], alpha, 0.0)
-            xy = xy0 + a[:, None] * (xy1 - xy0)
-            yaw = yaw0 + a * dyaw
-        return xy, np.arctan2(np.sin(yaw), np.cos(yaw)), dyaw, a
+            yaw1 = self.yaw[1, sel]
+            return self.xy[1, sel].copy(), np.arctan2(np.sin(yaw1), np.cos(yaw1)), terms[3], None
+        xy, yaw, a = self._lerp_at(terms, alpha)
+        return xy, yaw, terms[3], a
 
     def active_at(self, alpha: float) -> np.ndarray:
         """Which slots hold a vehicle on the road at ``alpha`` (the ``active`` of :meth:`poses`), without poses."""

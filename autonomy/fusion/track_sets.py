@@ -87,9 +87,7 @@ class TrackSet:
     p : np.ndarray
         (n,) target probabilities.
     lam : np.ndarray
-        (n,) largest eigenvalue of each of ``P`` (m²).
-    reach : float
-        Largest of ``lam`` (m²), 0 for no track.
+        (n,) largest eigenvalue of each of ``P`` (m²): how far a pair with the track can reach (module docstring).
     """
 
     reports: list[TrackReport]
@@ -97,8 +95,7 @@ class TrackSet:
     xy: np.ndarray
     P: np.ndarray
     p: np.ndarray
-    lam: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    reach: float = 0.0
+    lam: np.ndarray
     _tree: cKDTree | None = field(default=None, repr=False)
 
     def tree(self) -> cKDTree:
@@ -116,8 +113,7 @@ class TrackSet:
         a, b, c = P[:, 0, 0], 0.5 * (P[:, 0, 1] + P[:, 1, 0]), P[:, 1, 1]
         lam = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b * b)
         return cls(reports=list(reports), est=est, xy=est.xy, P=P,
-                   p=np.array([r.target_probability for r in reports], dtype=float), lam=lam,
-                   reach=float(lam.max()) if lam.size else 0.0)
+                   p=np.array([r.target_probability for r in reports], dtype=float), lam=lam)
 
 
 _PREDICTED: dict[tuple[int, float], tuple[TrackPicture, TrackSet]] = {}

@@ -165,7 +165,7 @@ def test_a_ray_into_a_car_is_cast_twice_and_finds_a_building_close_behind_it(tow
     assert sq.line_of_sight(starts, ends).all()
     assert len(starts) > 300 and sq.rays_cast - before <= 2.02 * len(starts)
     car = add_box(cid, [200.0, 0.0, 0.75], [2.4, 0.9, 0.75])
-    wall = add_box(cid, [205.0 - 2.4 - 0.05 + 0.5, 0.0, 5.0], [0.5, 10.0, 5.0])  # its face 5 cm past the car's
+    wall = add_box(cid, [200.0 + 2.4 + 0.05 + 0.5, 0.0, 5.0], [0.5, 10.0, 5.0])  # its face 5 cm past the car's
     blocked = PybulletSceneQuery(cid, sq.occluder_body_ids | {wall})
     assert car not in blocked.occluder_body_ids
     out = blocked.line_of_sight(np.array([[150.0, 0.0, 0.75], [150.0, 0.0, 0.75]]),

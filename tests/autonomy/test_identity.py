@@ -294,3 +294,38 @@ def test_equally_probable_tracks_give_the_smallest_id_and_the_belief_says_what_i
     assert ident.probability(3) != 1.0  # a copy
     assert ident.probability(7) == 0.0
     assert sum(ident.weights.values()) + ident.w_none == pytest.approx(1.0, abs=1e-15)
+
+
+def test_a_scan_s_reads_at_once_are_the_reads_one_by_one_to_the_bit():
+    """read_many (one compiled loop) does the floating-point operations of reading each track in turn and
+    renormalising after each (written out here with numpy, as the belief did): the same weights to the bit, and the
+    search centre at the last track whose readings turned."""
+    rng = np.random.default_rng(3)
+    ident = TargetIdentity(_config(background_density=1e-5))
+    ident.cue(0.0, np.zeros(2), sigma_m=30.0)
+    for k in range(300):
+        ident.confirmed(k + 1, 0.0, rng.normal(0, 40, 2), np.eye(2) * 4.0, evidence=float(rng.normal(0, 2)))
+    ids = [int(k) for k in rng.choice(np.arange(1, 320), 200, replace=False)]  # some not held
+    top = sorted(ident.weights, key=ident.weights.get)[-3:]
+    ids[50], ids[120], ids[150] = top  # likelier than H_0 before, turned by their readings
+    evidence = rng.normal(0, 3, len(ids))
+    evidence[[50, 120, 150]] = -40.0
+    evidence[7] = 80.0  # beyond the ±50 clip
+    w, w_none = ident._w.copy(), ident.w_none
+    ev, at, last = dict(ident.evidence), ident._at, None
+    for k, (track_id, e) in enumerate(zip(ids, evidence.tolist(), strict=True)):
+        if track_id not in at:
+            continue
+        new = max(min(e, 50.0), -50.0)
+        change, ev[track_id] = new - ev.get(track_id, 0.0), new
+        if change != 0.0:
+            i = at[track_id]
+            was = w[i] > w_none
+            w[i] *= math.exp(change)
+            total = float(np.cumsum(w)[-1]) + w_none
+            w, w_none = w / total, w_none / total
+            last = k if was and w[i] <= w_none else last
+    assert last is not None and last >= 150
+    ident.read_many(ids, evidence.tolist(), where=lambda k: (1.0, np.array([k, 0.0]), np.zeros(2), np.eye(2)))
+    assert np.array_equal(ident._w, w) and ident.w_none == w_none and ident.evidence == ev
+    np.testing.assert_array_equal(ident.centre.p, [last, 0.0])

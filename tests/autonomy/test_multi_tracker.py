@@ -385,3 +385,55 @@ def test_two_tracks_within_the_camera_s_resolution_are_not_judged_by_a_miss():
         far = max(tr.tracks, key=lambda x: x.filter.x[2])
         assert far.unseen == (pytest.approx(math.log(0.1)) if judged else 0.0)
         assert gap < CAMERA_RESOLUTION_M or judged
+
+
+def _sequential_reads(tracker: MultiTargetTracker, pairs) -> None:
+    for track, det in pairs:
+        if det.classes:
+            tracker._read_classes(track, [(1.0, det)])
+
+
+def test_a_scan_s_class_readings_read_together_equal_them_read_one_by_one(monkeypatch):
+    """A GNN scan's class readings are read for all its tracks at once: every track gets the bits that reading them
+    one by one gives (per-class log-likelihoods, evidence) and the identity belief the same weights, with readings
+    discounted (swap probability > 0), two attributes of 2 and 3 classes, some detections reading one attribute only,
+    and tracks with and without earlier readings."""
+    conf3 = np.array([[0.7, 0.2, 0.1], [0.15, 0.7, 0.15], [0.1, 0.2, 0.7]])
+
+    def run(sequential: bool) -> MultiTargetTracker:
+        if sequential:
+            monkeypatch.setattr(MultiTargetTracker, "_read_taken", _sequential_reads)
+        else:
+            monkeypatch.undo()
+        cfg = TrackerConfig(filter="ekf", model="cv", q=0.5, max_target_speed=30.0, lost_after_s=3.0)
+        ident = IdentityConfig(target_classes={"colour": 1, "length": 2}, background=BG, swap_probability=0.05,
+                               background_density=1e-5)
+        tr = MultiTargetTracker(cfg, MultiTrackerConfig(confirm_m=2, confirm_n=3), ident)
+        rng = np.random.default_rng(4)
+        cars = rng.uniform(-400, 400, (40, 2))
+        for k in range(12):
+            t = 0.5 * k
+            scan = []
+            for xy in cars + np.array([8.0, 0.0]) * t:
+                classes = []
+                if rng.uniform() < 0.8:
+                    classes.append(ClassMeasurement(attribute="colour", observed=int(rng.integers(2)), confusion=CONF))
+                if k >= 3 and rng.uniform() < 0.6:
+                    classes.append(ClassMeasurement(attribute="length", observed=int(rng.integers(3)),
+                                                    confusion=conf3))
+                scan.append(Detection(z=xy + rng.normal(0, SIGMA, 2), R=np.eye(2) * SIGMA**2, t_meas=t, t_arrival=t,
+                                      sensor_id="s", p_sensor_W=np.array([0.0, 0.0, 100.0]), kind="box",
+                                      classes=tuple(classes)))
+            tr.step(t, scan)
+        return tr
+
+    together, alone = run(False), run(True)
+    assert len(together.tracks) == len(alone.tracks) >= 30 and together.identity.held >= 30
+    assert sum(len(tr.class_loglik) == 2 for tr in together.tracks) >= 20
+    for a, b in zip(together.tracks, alone.tracks, strict=True):
+        assert a.track_id == b.track_id and a.evidence == b.evidence
+        assert a.class_loglik.keys() == b.class_loglik.keys()
+        for name in a.class_loglik:
+            assert np.array_equal(a.class_loglik[name], b.class_loglik[name])
+    assert together.identity.weights == alone.identity.weights
+    assert together.identity.w_none == alone.identity.w_none

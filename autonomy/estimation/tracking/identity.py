@@ -55,10 +55,11 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 __all__ = ["CHI2_2_99", "IdentityConfig", "SearchCentre", "TargetIdentity", "accumulate_readings",
-           "background_frequencies", "track_evidence"]
+           "background_frequencies", "class_evidence", "track_evidence"]
 
 CHI2_2_99 = 9.2103
 """The 99 % quantile of χ² with 2 degrees of freedom: a search region's, or two tracks' difference's, gate."""
@@ -148,34 +149,50 @@ def accumulate_readings(previous: np.ndarray | None, step: np.ndarray, frequenci
                         swap_probability: float) -> np.ndarray:
     """A track's per-class log-likelihood after one more reading of log-likelihood ``step`` (per class), from
     ``previous`` (None: the first reading): ``ℓₜ(c) = step(c) + log((1 − ε) e^{ℓₜ₋₁(c)} + ε Σ_c' π(c') e^{ℓₜ₋₁(c')})``
-    with ``ε = swap_probability`` and ``π = frequencies`` (uniform if None), module docstring."""
+    with ``ε = swap_probability`` and ``π = frequencies`` (uniform if None), module docstring. ``previous`` and
+    ``step`` may be (n, K): n tracks' readings at once, each row as alone."""
     step = np.asarray(step, dtype=float)
     if previous is None:
         return step.copy()
     prev = np.asarray(previous, dtype=float)
     if swap_probability == 0.0:
         return prev + step
-    freq = np.full(prev.size, 1.0 / prev.size) if frequencies is None else np.asarray(frequencies, dtype=float)
-    top = float(prev.max())
+    k = prev.shape[-1]
+    freq = np.full(k, 1.0 / k) if frequencies is None else np.asarray(frequencies, dtype=float)
+    top = prev.max(axis=-1, keepdims=True)
     e = np.exp(prev - top)
-    mixed = (1.0 - swap_probability) * e + swap_probability * float(freq @ e)
+    mixed = (1.0 - swap_probability) * e + swap_probability * _weighted_sum(e, freq)[..., None]
     return step + top + np.log(mixed)
+
+
+def class_evidence(loglik: np.ndarray, target_class: int, frequencies: np.ndarray | None) -> np.ndarray:
+    """One attribute's term of :func:`track_evidence`, ``ℓ(c_T) − log Σ_c π(c) exp ℓ(c)``, of per-class
+    log-likelihoods ``loglik`` (K,), or of (n, K) rows at once; ``π = frequencies`` (uniform if None)."""
+    ell = np.asarray(loglik, dtype=float)
+    k = ell.shape[-1]
+    freq = np.full(k, 1.0 / k) if frequencies is None else np.asarray(frequencies, dtype=float)
+    top = ell.max(axis=-1)
+    return ell[..., target_class] - (top + np.log(_weighted_sum(np.exp(ell - top[..., None]), freq)))
 
 
 def track_evidence(loglik: Mapping[str, np.ndarray], config: IdentityConfig) -> float:
     """``E = Σ_a [ℓ_a(c_T) − log Σ_c π_a(c) exp ℓ_a(c)]`` over the attributes the target has a class for, from a
-    track's per-class log-likelihoods ``loglik[attribute]`` of its readings (module docstring)."""
+    track's per-class log-likelihoods ``loglik[attribute]`` of its readings (module docstring), within ±50."""
     total = 0.0
     for name, c_t in config.target_classes.items():
         ell = loglik.get(name)
-        if ell is None:
-            continue
-        ell = np.asarray(ell, dtype=float)
-        bg = config.background.get(name)
-        freq = np.full(ell.size, 1.0 / ell.size) if bg is None else np.asarray(bg, dtype=float)
-        top = float(ell.max())
-        total += float(ell[c_t]) - (top + math.log(float(freq @ np.exp(ell - top))))
+        if ell is not None:
+            total += float(class_evidence(ell, c_t, config.background.get(name)))
     return max(min(total, 50.0), -50.0)
+
+
+def _weighted_sum(e: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``Σ_c w(c) e(c)`` along the last axis of ``e``, the products added one after another in class order (as a
+    dot product of so few terms is), so that a row gives the same bits alone or among others."""
+    total = e[..., 0] * w[0]
+    for c in range(1, e.shape[-1]):
+        total = total + e[..., c] * w[c]
+    return total
 
 
 class TargetIdentity:
@@ -254,21 +271,34 @@ class TargetIdentity:
         weight changes by ``exp(evidence − previous evidence)``. If that takes the track from likelier the target than
         ``H_0`` to less likely (its readings turned: it swapped onto another car), the target is believed to be near
         where the track is, ``where()`` = (t, p, v, P) as for :meth:`deleted`, and searched for from there."""
-        i = self._at.get(track_id)
-        if i is None:
+        self.read_many([track_id], [evidence], None if where is None else lambda _: where())
+
+    def read_many(self, track_ids: Sequence[int], evidences: Sequence[float],
+                  where: Callable[[int], tuple[float, np.ndarray, np.ndarray, np.ndarray]] | None = None) -> None:
+        """:meth:`read` of each track of ``track_ids`` with its evidence, one after another (a scan's readings):
+        the same floating-point operations, the belief renormalised after each, in one compiled loop. Of the tracks
+        whose readings turned, the last one's ``where(k)`` (k its place in ``track_ids``) becomes the search centre,
+        as reading them one by one leaves it."""
+        at, idx, factor, place = self._at, [], [], []
+        for k, (track_id, evidence) in enumerate(zip(track_ids, evidences, strict=True)):
+            i = at.get(track_id)
+            if i is None:
+                continue
+            new = max(min(float(evidence), 50.0), -50.0)
+            change = new - self.evidence.get(track_id, 0.0)
+            self.evidence[track_id] = new
+            if change != 0.0:
+                idx.append(i)
+                factor.append(math.exp(change))
+                place.append(k)
+        if not idx:
             return
-        new = max(min(float(evidence), 50.0), -50.0)
-        change = new - self.evidence.get(track_id, 0.0)
-        self.evidence[track_id] = new
-        if change != 0.0:
-            was_likelier = self._w[i] > self.w_none
-            self._w[i] *= math.exp(change)
-            self._normalise()
-            if was_likelier and self._w[i] <= self.w_none and where is not None:
-                t, p, v, P = where()
-                self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(),
-                                           v=np.asarray(v, dtype=float)[:2].copy(),
-                                           P=np.asarray(P, dtype=float)[:2, :2].copy())
+        self.w_none, turned = _reweigh(self._w, self.w_none, np.array(idx, dtype=np.int64), np.array(factor))
+        if turned >= 0 and where is not None:
+            t, p, v, P = where(place[turned])
+            self.centre = SearchCentre(t=float(t), p=np.asarray(p, dtype=float)[:2].copy(),
+                                       v=np.asarray(v, dtype=float)[:2].copy(),
+                                       P=np.asarray(P, dtype=float)[:2, :2].copy())
 
     def deleted(self, track_id: int, t: float, p: np.ndarray, v: np.ndarray, P: np.ndarray) -> None:
         """Track ``track_id`` was dropped at ``t`` (s) with last estimate ``p`` (m), ``v`` (m/s), position
@@ -390,6 +420,34 @@ class TargetIdentity:
         if self.centre is None:
             return None
         return self.centre.at(t, self.config.search_speed)
+
+
+@numba.njit(cache=True)
+def _reweigh(w: np.ndarray, w_none: float, idx: np.ndarray, factor: np.ndarray) -> tuple[float, int]:
+    """``w[idx[k]] *= factor[k]`` for each k in turn, each followed by :meth:`TargetIdentity._normalise`'s arithmetic
+    (the weights summed in order, plus ``w_none``; all divided by the total, or reset when it is not positive), in
+    place. Returns the new ``w_none`` and the last k whose track went from likelier than ``H_0`` to not (-1: none)."""
+    turned = -1
+    for k in range(idx.size):
+        i = idx[k]
+        was_likelier = w[i] > w_none
+        w[i] *= factor[k]
+        total = 0.0
+        if w.size:
+            total = w[0]
+            for j in range(1, w.size):
+                total += w[j]
+        total += w_none
+        if not total > 0.0:
+            w[:] = 0.0
+            w_none = 1.0
+        else:
+            for j in range(w.size):
+                w[j] /= total
+            w_none /= total
+        if was_likelier and w[i] <= w_none:
+            turned = k
+    return w_none, turned
 
 
 def background_frequencies(classes: Sequence[Mapping[str, int]], sizes: Mapping[str, int]) -> dict[str, np.ndarray]:

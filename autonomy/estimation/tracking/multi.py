@@ -43,7 +43,7 @@ from .batch_update import update_pairs
 from .class_affinity import ClassAffinity
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
-from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, track_evidence
+from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, class_evidence, track_evidence
 from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -347,9 +347,8 @@ class MultiTargetTracker:
                 self._deferred.extend(d for tr, d in pairs if tr.track_id == self._defer[0])
                 applied = [(tr, d) for tr, d in pairs if tr.track_id != self._defer[0]]
             update_pairs([(tr.filter, det) for tr, det in applied], self.layout, self.config.target_height)
+            self._read_taken(pairs)
             for track, det in pairs:
-                if getattr(det, "classes", ()):
-                    self._read_classes(track, [(1.0, det)])
                 self._updated(track, det, t_meas)
                 hit.add(id(track))
             if pairs:
@@ -489,6 +488,58 @@ class MultiTargetTracker:
         track.evidence = track_evidence(track.class_loglik, self.identity.config)
         if track.confirmed:
             self.identity.read(track.track_id, track.evidence, where=lambda: self._where(track))
+
+    def _read_taken(self, pairs: Sequence[tuple[Track, MeasurementLike]]) -> None:
+        """:meth:`_read_classes` of each track with the one detection it took whole (a GNN scan; each track once),
+        every track's readings of an attribute computed together, row by row the same numbers as one by one; then
+        the identity belief reads their evidence in the pairs' order."""
+        reads = [(tr, det.classes) for tr, det in pairs if getattr(det, "classes", ())]
+        if not reads:
+            return
+        by_attr: dict[str, list[tuple[Track, np.ndarray]]] = {}
+        for track, classes in reads:
+            for c in classes:
+                by_attr.setdefault(c.attribute, []).append((track, c.likelihood()))
+        if (sum(map(len, by_attr.values())) != sum(len(c) for _, c in reads)  # an attribute twice in a detection
+                or len({id(tr) for tr, _ in reads}) != len(reads)
+                or any(len({lik.shape for _, lik in items}) != 1 for items in by_attr.values())):
+            for track, det in pairs:
+                if getattr(det, "classes", ()):
+                    self._read_classes(track, [(1.0, det)])
+            return
+        ident = self.identity.config
+        for name, items in by_attr.items():
+            step = np.log(np.maximum(np.array([lik for _, lik in items], dtype=float), 1e-300))
+            ells = list(step)  # a first reading: its step
+            before = [k for k, (tr, _) in enumerate(items) if tr.class_loglik.get(name) is not None]
+            if before:
+                prev = [items[k][0].class_loglik[name] for k in before]
+                if len({np.shape(p) for p in prev}) == 1:
+                    new = accumulate_readings(np.array(prev, dtype=float), step[before], ident.background.get(name),
+                                              ident.swap_probability)
+                else:
+                    new = [accumulate_readings(p, step[k], ident.background.get(name), ident.swap_probability)
+                           for p, k in zip(prev, before, strict=True)]
+                for k, ell in zip(before, new, strict=True):
+                    ells[k] = ell
+            for (track, _), ell in zip(items, ells, strict=True):
+                track.class_loglik[name] = ell
+        tracks = [tr for tr, _ in reads]
+        total = np.zeros(len(tracks))
+        for name, c_t in ident.target_classes.items():
+            has = [k for k, tr in enumerate(tracks) if tr.class_loglik.get(name) is not None]
+            if not has:
+                continue
+            ells = [tracks[k].class_loglik[name] for k in has]
+            if len({np.shape(e) for e in ells}) == 1:
+                total[has] += class_evidence(np.array(ells, dtype=float), c_t, ident.background.get(name))
+            else:
+                total[has] += [class_evidence(e, c_t, ident.background.get(name)) for e in ells]
+        for track, evidence in zip(tracks, np.clip(total, -50.0, 50.0).tolist(), strict=True):
+            track.evidence = evidence
+        held = [tr for tr in tracks if tr.confirmed]
+        self.identity.read_many([tr.track_id for tr in held], [tr.evidence for tr in held],
+                                where=lambda k: self._where(held[k]))
 
     def _confirmations(self, live: Sequence[Track], hit: set[int], t_meas: float) -> None:
         m, n = self.multi.confirm_m, self.multi.confirm_n

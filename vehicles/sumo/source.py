@@ -163,7 +163,10 @@ class SumoTraffic:
         self._placed = np.full(n, -1, dtype=np.int64)  # tick each body was last placed at; -1: parked
         self._park_all()
         self._slots = SlotStates(n)
-        self._road_memo: dict[int, tuple[str, float, float, str, float, float]] = {}  # see road_positions
+        # road_positions' last answer per slot, kept while the slot's edge and position stay the same to the bit:
+        # the edge, x, y it was for (None, NaN: none yet), then the road, arc length and lateral offset
+        self._road_memo = (np.full(n, None, dtype=object), np.full(n, np.nan), np.full(n, np.nan),
+                           np.full(n, "", dtype=object), np.zeros(n), np.zeros(n))
         self._events: list[dict] = []
         self._physics: list[str] = []  # SUMO ids of the physics cars' copies, by index in OtherCars
         self._physics_live: set[str] = set()  # those SUMO has now
@@ -441,35 +444,23 @@ class SumoTraffic:
         moved in one compiled call: :meth:`~worlds.roads.network.RoadNetwork.project_on` and ``nearest_many``), kept
         per slot while the slot's edge and position stay the same to the bit (vehicles waiting at junctions)."""
         ps = self.poses(tick)
-        edges = self._slots.roads_at((tick - self._t_prev) / self.config.period)
-        n = self.config.n_slots
-        road_ids, s, lat = [""] * n, np.zeros(n), np.zeros(n)
-        memo = self._road_memo
-        on_road: list[tuple[int, str]] = []  # (slot, road) of the slots SUMO has on a road's edge, to project
-        loose: list[int] = []  # slots inside junctions, for the nearest road
-        xs, ys = ps.xy[:, 0].tolist(), ps.xy[:, 1].tolist()
-        for k in np.flatnonzero(ps.active).tolist():
-            kept = memo.get(k)
-            if kept is not None and kept[0] == edges[k] and kept[1] == xs[k] and kept[2] == ys[k]:
-                road_ids[k], s[k], lat[k] = kept[3], kept[4], kept[5]
-                continue
-            rid = self.net.road_of(edges[k])
-            if rid:
-                on_road.append((k, rid))
-            else:
-                loose.append(k)
-        if on_road:  # one compiled call for every slot (a city's worth of Road.project)
-            idx = np.array([k for k, _ in on_road])
-            s[idx], lat[idx] = self.network.project_on([r for _, r in on_road], ps.xy[idx])
-            for k, rid in on_road:
-                road_ids[k] = rid
-        if loose:
-            idx = np.array(loose)
-            ids, s[idx], lat[idx] = self.network.nearest_many(ps.xy[idx])
-            for k, rid in zip(loose, ids, strict=True):
-                road_ids[k] = rid
-        for k in (*(k for k, _ in on_road), *loose):
-            memo[k] = (edges[k], xs[k], ys[k], road_ids[k], float(s[k]), float(lat[k]))
+        edges = np.array(self._slots.roads_at((tick - self._t_prev) / self.config.period), dtype=object)
+        m_edge, m_x, m_y, m_road, m_s, m_lat = self._road_memo
+        x, y = ps.xy[:, 0], ps.xy[:, 1]
+        kept = ps.active & (edges == m_edge) & (x == m_x) & (y == m_y)
+        redo = np.flatnonzero(ps.active & ~kept)
+        roads = np.array([self.net.road_of(e) for e in edges[redo].tolist()], dtype=object)
+        on = roads != ""  # on a road's edge: projected onto it; the rest are inside junctions: the nearest road
+        if on.any():  # one compiled call for every slot (a city's worth of Road.project)
+            k = redo[on]
+            m_s[k], m_lat[k] = self.network.project_on(roads[on].tolist(), ps.xy[k])
+        if not on.all():
+            k = redo[~on]
+            ids, m_s[k], m_lat[k] = self.network.nearest_many(ps.xy[k])
+            roads[~on] = ids
+        m_edge[redo], m_x[redo], m_y[redo], m_road[redo] = edges[redo], x[redo], y[redo], roads
+        road_ids = np.where(ps.active, m_road, "").tolist()
+        s, lat = np.where(ps.active, m_s, 0.0), np.where(ps.active, m_lat, 0.0)
         return road_ids, s, lat, ps.active & (ps.speed < _STOPPED_SPEED)
 
     def pop_events(self) -> list[dict]:

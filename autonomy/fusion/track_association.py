@@ -158,18 +158,22 @@ class TeamTrackFusion:
             if not 0.0 <= t - pic.t <= self.max_age_s:
                 continue
             members += 1
-            none += max(0.0, 1.0 - sum(r.target_probability for r in pic.tracks))
             their_set = track_set(pic, t, self.q)
-            theirs, their_est = their_set.reports, their_set.est
+            theirs, their_est, their_p = their_set.reports, their_set.est, their_set.p
+            if len(theirs) == len(pic.tracks):  # every track has a covariance: the same sum, added in order
+                total = float(np.cumsum(their_p)[-1]) if len(theirs) else 0.0
+            else:
+                total = sum(r.target_probability for r in pic.tracks)
+            none += max(0.0, 1.0 - total)
             pairs = associate_sets(own_set, their_set, self.threshold)
             self.associated += len(pairs)
-            taken = set()
+            free = their_p > 0.0
             for i, j in pairs:
                 pooled[i] += theirs[j].target_probability
                 fused_parts[i].append((their_est, j))
-                taken.add(j)
-            loose.extend((theirs[j].target_probability, their_est, j) for j in range(len(theirs))
-                         if j not in taken and theirs[j].target_probability > 0.0)
+                free[j] = False
+            loose.extend((p_j, their_est, j) for j, p_j in zip(np.flatnonzero(free).tolist(),
+                                                               their_p[free].tolist(), strict=True))
         none += own_none * max(0.0, 1.0 - sum(p for p, _, _ in loose))  # one's own share of "no track"
         best_own = int(np.argmax(pooled)) if len(pooled) else -1
         best_loose = max(range(len(loose)), key=lambda k: loose[k][0]) if loose else -1

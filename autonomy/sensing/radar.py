@@ -171,9 +171,15 @@ class Radar(Sensor):
 
         Returns ``(mask (M,) bool, pd (M,))``; ``pd`` is zero where ``mask`` is False.
         """
+        mask, pd = self._in_view(pose, targets)
+        self._drop_hidden(mask, pose, targets, scene)
+        return mask, np.where(mask, pd, 0.0)
+
+    def _in_view(self, pose: SensorPose, targets: TargetTruth) -> tuple[np.ndarray, np.ndarray]:
+        """(M,) which targets lie in range and field of view and move fast enough radially, and (M,) every target's
+        detection probability at its range; no line of sight yet."""
         cfg = self.config
-        m = len(targets)
-        if m == 0:
+        if len(targets) == 0:
             return np.zeros(0, dtype=bool), np.zeros(0)
         d = targets.p_W - pose.p_W
         r = np.linalg.norm(d, axis=1)
@@ -182,11 +188,16 @@ class Radar(Sensor):
         mask = (
             (r <= cfg.max_range) & cfg.fov.contains(d, pose.R_WB) & (radial_ground_speed >= cfg.min_detectable_velocity)
         )
+        return mask, cfg.pd(r)
+
+    @staticmethod
+    def _drop_hidden(mask: np.ndarray, pose: SensorPose, targets: TargetTruth, scene: SceneQuery) -> None:
+        """Clear ``mask`` (in place) where a building or another body hides the target from the sensor; rays are cast
+        only for the targets ``mask`` holds."""
         if np.any(mask):
             idx = np.flatnonzero(mask)
             los = scene.line_of_sight(np.repeat(pose.p_W[None, :], idx.size, axis=0), targets.p_W[idx])
             mask[idx[~np.asarray(los, dtype=bool)]] = False
-        return mask, np.where(mask, cfg.pd(r), 0.0)
 
     def _ideal(self, pose: SensorPose, p_W: np.ndarray, v_W: np.ndarray) -> np.ndarray:
         d = p_W - pose.p_W
@@ -201,8 +212,11 @@ class Radar(Sensor):
         self, tick_time_s: float, pose: SensorPose, targets: TargetTruth, scene: SceneQuery, rng: np.random.Generator
     ) -> SensorOutput:
         cfg = self.config
-        mask, pd = self.detectable(pose, targets, scene)
-        hit = mask & (rng.uniform(size=len(targets)) < pd)
+        # a target is detected where it is in view, its draw falls below its pd, and nothing hides it: the rays are
+        # cast only for those the first two leave (the draws are those of detectable's mask and pd, the same hits)
+        hit, pd = self._in_view(pose, targets)
+        hit &= rng.uniform(size=len(targets)) < pd
+        self._drop_hidden(hit, pose, targets, scene)
         z_true = self._ideal(pose, targets.p_W[hit], targets.v_W[hit]) if np.any(hit) else np.zeros((0, cfg.R.shape[0]))
         ids = list(targets.ids[hit])
 

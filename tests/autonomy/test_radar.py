@@ -285,3 +285,41 @@ def test_two_dimensional_radar_reports_range_and_azimuth_with_their_noise():
     assert lo <= np.sum(res) <= hi
     with pytest.raises(ValueError, match="sigma_range_rate needs the elevation channel"):
         RadarConfig(sigma_range=1.0, sigma_azimuth=0.01, sigma_range_rate=0.5)
+
+
+class _CountingScene(FakeScene):
+    """A FakeScene that keeps how many sight lines it was asked for."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.asked = 0
+
+    def line_of_sight(self, from_W, to_W):
+        self.asked += len(np.atleast_2d(from_W))
+        return super().line_of_sight(from_W, to_W)
+
+
+def test_sight_lines_are_cast_only_for_targets_whose_draw_detects_them_and_the_hits_are_unchanged():
+    """A scan's hits are the targets in view, unhidden, whose uniform draw falls below their pd (``detectable``'s mask
+    and pd with the scan's first draw); the sight lines are asked only for those in view whose draw passed, about pd
+    of them, not for every target in view."""
+    scene = _CountingScene([Building.cuboid((600.0, 0.0), (80.0, 400.0, 60.0))])  # hides a few dozen
+    radar = Radar(RadarConfig(**SIGMAS, clutter_rate=0.0, max_range=3000.0, range_ref=1500.0))
+    pose = SensorPose(p_W=[0.0, 0.0, 50.0])
+    rng = np.random.default_rng(8)
+    n = 400
+    xy = rng.uniform([-2000.0, -2000.0], [2000.0, 2000.0], (n, 2))
+    v = rng.normal(0.0, 10.0, (n, 3)) * [1.0, 1.0, 0.0]
+    tgt = TargetTruth(ids=list(range(n)), p_W=np.column_stack([xy, np.full(n, 0.75)]), v_W=v, kind=("car",) * n,
+                      yaw=np.zeros(n))
+    seen = FakeScene(scene.buildings)
+    mask, pd = radar.detectable(pose, tgt, seen)
+    in_view = radar._in_view(pose, tgt)[0]
+    for seed in range(5):
+        scene.asked = 0
+        out = radar.measure(0.0, pose, tgt, scene, np.random.default_rng(seed))
+        u = np.random.default_rng(seed).uniform(size=n)
+        expect = np.flatnonzero(mask & (u < pd))
+        assert sorted(out.truth_ids.tolist()) == expect.tolist()
+        assert scene.asked == int(np.sum(in_view & (u < radar.config.pd(np.linalg.norm(tgt.p_W - pose.p_W, axis=1)))))
+        assert scene.asked < 0.95 * in_view.sum() and mask.sum() <= in_view.sum() - 20

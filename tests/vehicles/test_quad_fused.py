@@ -73,3 +73,27 @@ def test_rotation_and_body_rates_in_place_matches_the_allocating_forms(rng) -> N
     rotation_and_body_rates(x, R, omega_B)
     R_ref = quat_to_rotmat(np.ascontiguousarray(x[:, 3:7]))
     assert _same(R, R_ref) and _same(omega_B, rotate_T(R_ref, np.ascontiguousarray(x[:, 10:13])))
+
+
+def test_one_uav_and_many_hand_the_kernels_arrays_of_one_layout(new_bullet_session, rng, run_fleet) -> None:
+    """The live state's arrays (given to the compiled kernels: the command shaper, the velocity loop, the actuation,
+    the watchdog) have the same numba type with one UAV as with three, so a one-UAV world does not compile them again
+    (a column view of the packed state is contiguous for one row only); they hold what PyBullet reports."""
+    import numba
+    import pybullet as p
+
+    types = []
+    for n in (1, 3):
+        with new_bullet_session() as cid:
+            fleet = QuadrotorFleet(cid, [load_airframe("survey_quad")] * n, np.column_stack(
+                [np.arange(n) * 10.0, np.zeros(n), np.full(n, 30.0)]), np.zeros(n), 240, FleetOptions(), rng)
+            fleet.set_command(0, VelocitySetpoint(v_W=[3.0, -2.0, 1.0], yaw=0.5))
+            run_fleet(fleet, 20)
+            st = fleet.live_state
+            types.append([numba.typeof(a) for a in (st.p_W, st.q_WB, st.v_W, st.R_WB, st.omega_B)])
+            for i, body in enumerate(fleet.body_ids):
+                pos, quat = p.getBasePositionAndOrientation(int(body), physicsClientId=cid)
+                vel, _ = p.getBaseVelocity(int(body), physicsClientId=cid)
+                assert st.p_W[i].tolist() == list(pos) and st.q_WB[i].tolist() == list(quat)
+                assert st.v_W[i].tolist() == list(vel)
+    assert types[0] == types[1]

@@ -204,9 +204,11 @@ class QuadrotorFleet:
         self._events: list[dict] = []
         # The live state: arrays refilled in place at every read (``state`` hands out copies).
         self._x = np.zeros((n, 13))  # rows (p_W, q_WB, v_W, omega_W) as PyBullet reports them
-        x = self._x
-        self._state = FleetState(p_W=x[:, 0:3], q_WB=x[:, 3:7], R_WB=np.zeros((n, 3, 3)), v_W=x[:, 7:10],
-                                 omega_B=np.zeros((n, 3)), rotor_speed=self._rotors.omega, thrust=self._thrust)
+        # the state's arrays are contiguous copies of x's columns, not views: a column view is contiguous for one UAV
+        # only, and the compiled kernels they are handed to would be compiled again for each layout
+        self._state = FleetState(p_W=np.zeros((n, 3)), q_WB=np.zeros((n, 4)), R_WB=np.zeros((n, 3, 3)),
+                                 v_W=np.zeros((n, 3)), omega_B=np.zeros((n, 3)), rotor_speed=self._rotors.omega,
+                                 thrust=self._thrust)
         self._read_state()
         self._shaper = CommandShaper(s, self._dt, self._state)
         F0 = np.zeros((n, 3))
@@ -333,8 +335,10 @@ class QuadrotorFleet:
         for i in self._body_list:  # one row per UAV: position, quaternion, linear and angular velocity (world)
             (pos, quat), (vel, omega) = get_pose(i, cid), get_vel(i, cid)
             rows.append(pos + quat + vel + omega)
-        self._x[:] = rows
-        rotation_and_body_rates(self._x, st.R_WB, st.omega_B)
+        x = self._x
+        x[:] = rows
+        st.p_W[:], st.q_WB[:], st.v_W[:] = x[:, 0:3], x[:, 3:7], x[:, 7:10]
+        rotation_and_body_rates(x, st.R_WB, st.omega_B)
         return st
 
     def _record_tilt_events(self, tick: int) -> None:

@@ -12,7 +12,7 @@ from scipy.stats import binom
 
 from autonomy.estimation.tracker import TrackerConfig
 from autonomy.estimation.tracking.gated import TargetGatedEstimator
-from autonomy.estimation.tracking.identity import IdentityConfig
+from autonomy.estimation.tracking.identity import IdentityConfig, accumulate_readings, track_evidence
 from autonomy.estimation.tracking.multi import MultiTargetTracker, MultiTrackerConfig
 from autonomy.estimation.tracking.unseen import CAMERA_RESOLUTION_M, UNSEEN_DROP, UNSEEN_NODES
 from autonomy.sensing.measurement import ClassMeasurement, Detection
@@ -388,9 +388,20 @@ def test_two_tracks_within_the_camera_s_resolution_are_not_judged_by_a_miss():
 
 
 def _sequential_reads(tracker: MultiTargetTracker, pairs) -> None:
+    """A scan's class readings one by one: each detection's readings into its track's per-class log-likelihoods,
+    the track's evidence, and the belief's read of it (the arithmetic of reading them one track at a time)."""
+    ident = tracker.identity.config
     for track, det in pairs:
-        if det.classes:
-            tracker._read_classes(track, [(1.0, det)])
+        if not det.classes:
+            continue
+        for c in det.classes:
+            step = np.log(np.maximum(c.likelihood(), 1e-300))
+            track.class_loglik[c.attribute] = accumulate_readings(track.class_loglik.get(c.attribute), step,
+                                                                  ident.background.get(c.attribute),
+                                                                  ident.swap_probability)
+        track.evidence = track_evidence(track.class_loglik, ident)
+        if track.confirmed:
+            tracker.identity.read(track.track_id, track.evidence, where=lambda track=track: tracker._where(track))
 
 
 def test_a_scan_s_class_readings_read_together_equal_them_read_one_by_one(monkeypatch):

@@ -43,7 +43,7 @@ from .batch_update import update_pairs
 from .class_affinity import ClassAffinity
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
-from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, class_evidence, track_evidence
+from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, class_evidence
 from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -478,21 +478,12 @@ class MultiTargetTracker:
                     by_attr[c.attribute] = lik
                 else:
                     by_attr[c.attribute] = (np.full(lik.size, none_weight) if prev is None else prev) + w * lik
-        if not by_attr:
-            return
-        ident = self.identity.config
-        for name, lik in by_attr.items():
-            step = np.log(np.maximum(lik, 1e-300))
-            track.class_loglik[name] = accumulate_readings(track.class_loglik.get(name), step,
-                                                           ident.background.get(name), ident.swap_probability)
-        track.evidence = track_evidence(track.class_loglik, self.identity.config)
-        if track.confirmed:
-            self.identity.read(track.track_id, track.evidence, where=lambda: self._where(track))
+        if by_attr:
+            self._absorb({name: [(track, lik)] for name, lik in by_attr.items()}, [track])
 
     def _read_taken(self, pairs: Sequence[tuple[Track, MeasurementLike]]) -> None:
         """:meth:`_read_classes` of each track with the one detection it took whole (a GNN scan; each track once),
-        every track's readings of an attribute computed together, row by row the same numbers as one by one; then
-        the identity belief reads their evidence in the pairs' order."""
+        all of the scan's tracks absorbed together (:meth:`_absorb`)."""
         reads = [(tr, det.classes) for tr, det in pairs if getattr(det, "classes", ())]
         if not reads:
             return
@@ -501,40 +492,46 @@ class MultiTargetTracker:
             for c in classes:
                 by_attr.setdefault(c.attribute, []).append((track, c.likelihood()))
         if (sum(map(len, by_attr.values())) != sum(len(c) for _, c in reads)  # an attribute twice in a detection
-                or len({id(tr) for tr, _ in reads}) != len(reads)
-                or any(len({lik.shape for _, lik in items}) != 1 for items in by_attr.values())):
+                or len({id(tr) for tr, _ in reads}) != len(reads)):
             for track, det in pairs:
                 if getattr(det, "classes", ()):
                     self._read_classes(track, [(1.0, det)])
             return
+        self._absorb(by_attr, [tr for tr, _ in reads])
+
+    def _absorb(self, by_attr: dict[str, list[tuple[Track, np.ndarray]]], tracks: Sequence[Track]) -> None:
+        """Per attribute, each listed track's likelihood of its new readings (per class) into its per-class
+        log-likelihoods (:func:`.identity.accumulate_readings`); then the evidence of ``tracks`` (each once;
+        :func:`.identity.track_evidence`), which the identity belief reads for the confirmed ones in their order.
+        Arrays of one shape are computed as the rows of one array, each row the same numbers as alone."""
         ident = self.identity.config
         for name, items in by_attr.items():
-            step = np.log(np.maximum(np.array([lik for _, lik in items], dtype=float), 1e-300))
-            ells = list(step)  # a first reading: its step
-            before = [k for k, (tr, _) in enumerate(items) if tr.class_loglik.get(name) is not None]
-            if before:
-                prev = [items[k][0].class_loglik[name] for k in before]
-                if len({np.shape(p) for p in prev}) == 1:
-                    new = accumulate_readings(np.array(prev, dtype=float), step[before], ident.background.get(name),
+            bg = ident.background.get(name)
+            liks = [lik for _, lik in items]
+            prev = [tr.class_loglik.get(name) for tr, _ in items]
+            before = [k for k, ell in enumerate(prev) if ell is not None]
+            if _alike(liks) and _alike([prev[k] for k in before]):
+                step = np.log(np.maximum(np.array(liks, dtype=float), 1e-300))
+                ells = list(step)  # a first reading: its step
+                if before:
+                    new = accumulate_readings(np.array([prev[k] for k in before], dtype=float), step[before], bg,
                                               ident.swap_probability)
-                else:
-                    new = [accumulate_readings(p, step[k], ident.background.get(name), ident.swap_probability)
-                           for p, k in zip(prev, before, strict=True)]
-                for k, ell in zip(before, new, strict=True):
-                    ells[k] = ell
+                    for k, ell in zip(before, new, strict=True):
+                        ells[k] = ell
+            else:
+                ells = [accumulate_readings(ell, np.log(np.maximum(lik, 1e-300)), bg, ident.swap_probability)
+                        for ell, lik in zip(prev, liks, strict=True)]
             for (track, _), ell in zip(items, ells, strict=True):
                 track.class_loglik[name] = ell
-        tracks = [tr for tr, _ in reads]
         total = np.zeros(len(tracks))
         for name, c_t in ident.target_classes.items():
             has = [k for k, tr in enumerate(tracks) if tr.class_loglik.get(name) is not None]
             if not has:
                 continue
             ells = [tracks[k].class_loglik[name] for k in has]
-            if len({np.shape(e) for e in ells}) == 1:
-                total[has] += class_evidence(np.array(ells, dtype=float), c_t, ident.background.get(name))
-            else:
-                total[has] += [class_evidence(e, c_t, ident.background.get(name)) for e in ells]
+            bg = ident.background.get(name)
+            total[has] += (class_evidence(np.array(ells, dtype=float), c_t, bg) if _alike(ells)
+                           else [class_evidence(ell, c_t, bg) for ell in ells])
         for track, evidence in zip(tracks, np.clip(total, -50.0, 50.0).tolist(), strict=True):
             track.evidence = evidence
         held = [tr for tr in tracks if tr.confirmed]
@@ -656,3 +653,6 @@ def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionMod
                                         clutter_density=multi.clutter_density, affinity=affinity)
 
 
+def _alike(arrays: Sequence[np.ndarray]) -> bool:
+    """Whether ``arrays`` all have one shape (and so stack into the rows of one array)."""
+    return len({np.shape(a) for a in arrays}) <= 1

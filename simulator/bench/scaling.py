@@ -20,7 +20,7 @@ from typing import Any
 
 import yaml
 
-__all__ = ["loop_rtf", "main", "sweep"]
+__all__ = ["ceiling_rtf", "loop_rtf", "main", "sweep"]
 
 WORLD = "helsinki_traffic_builtin"
 CARS = (0, 50, 200, 1000)
@@ -78,6 +78,20 @@ def loop_rtf(raw: dict[str, Any]) -> dict[str, float]:
     row.update({p: metrics["wall_time_breakdown_s"].get(p, 0.0) / sim for p in PHASES})
     return row
 
+
+def ceiling_rtf(row: dict[str, Any], free: tuple[str, ...] = ("autonomy",)) -> float:
+    """The wall real-time factor the loop of ``row`` (:func:`loop_rtf`) would have had if its phases ``free`` had
+    cost nothing and the rest the same: its simulated seconds over its loop's wall seconds less those phases'. A
+    ceiling measured in the same run: no speed-up of the ``free`` phases alone can bring the loop above it. The
+    phases' seconds count the first tick, which the loop's window leaves out, so the ceiling errs high."""
+    unknown = [p for p in free if p not in PHASES]
+    if unknown:
+        raise ValueError(f"ceiling_rtf: {unknown!r} are not phases of a run (expected some of {PHASES})")
+    rest = row["wall_s"] - sum(row[p] for p in free) * row["sim_s"]
+    if not rest > 0:
+        raise ValueError(f"ceiling_rtf: the phases {free!r} take {row['wall_s'] - rest:.3f} s of a loop of "
+                         f"{row['wall_s']:.3f} s wall; they must take less than the whole loop")
+    return row["sim_s"] / rest
 
 def sweep(duration_s: float = 15.0, uav_duration_s: float = 10.0) -> list[dict[str, Any]]:
     """Every configuration of the module docstring, one run each (seed of the world file)."""

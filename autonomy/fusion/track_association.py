@@ -39,7 +39,7 @@ from autonomy.diagnostics import HoldsTracks
 from interfaces.state import TargetEstimate, TrackPicture, TrackReport
 
 from .track_fusion import PredictedEstimates, fuse_estimates
-from .track_sets import TrackSet, associate_sets, big_cost, identity_cost, mahalanobis2, track_set
+from .track_sets import TrackSet, big_cost, identity_cost, mahalanobis2, set_pairs, track_set
 
 __all__ = ["TeamTrackFusion", "TeamTarget", "associate_positions", "associate_tracks", "track_picture"]
 
@@ -151,7 +151,7 @@ class TeamTrackFusion:
         pooled = own_set.p.copy()
         own_none = max(0.0, 1.0 - float(pooled.sum()))
         none = 0.0  # the members' pooled "in no track", one's own share added after the loop
-        fused_parts: list[list[tuple[PredictedEstimates, int]]] = [[] for _ in mine]
+        taken: list[tuple[PredictedEstimates, np.ndarray, np.ndarray]] = []  # per picture: its pairs with one's own
         loose: list[tuple[float, PredictedEstimates, int]] = []
         members = 1
         for pic in pictures:
@@ -159,19 +159,18 @@ class TeamTrackFusion:
                 continue
             members += 1
             their_set = track_set(pic, t, self.q)
-            theirs, their_est, their_p = their_set.reports, their_set.est, their_set.p
-            if len(theirs) == len(pic.tracks):  # every track has a covariance: the same sum, added in order
-                total = float(np.cumsum(their_p)[-1]) if len(theirs) else 0.0
+            their_est, their_p = their_set.est, their_set.p
+            if len(their_p) == len(pic.tracks):  # every track has a covariance: the same sum, added in order
+                total = float(np.cumsum(their_p)[-1]) if len(their_p) else 0.0
             else:
                 total = sum(r.target_probability for r in pic.tracks)
             none += max(0.0, 1.0 - total)
-            pairs = associate_sets(own_set, their_set, self.threshold)
-            self.associated += len(pairs)
+            rows, cols = set_pairs(own_set, their_set, self.threshold)
+            self.associated += len(rows)
+            pooled[rows] += their_p[cols]  # a matching: each own track once per picture, pictures in order
+            taken.append((their_est, rows, cols))
             free = their_p > 0.0
-            for i, j in pairs:
-                pooled[i] += theirs[j].target_probability
-                fused_parts[i].append((their_est, j))
-                free[j] = False
+            free[cols] = False
             loose.extend((p_j, their_est, j) for j, p_j in zip(np.flatnonzero(free).tolist(),
                                                                their_p[free].tolist(), strict=True))
         none += own_none * max(0.0, 1.0 - sum(p for p, _, _ in loose))  # one's own share of "no track"
@@ -193,7 +192,8 @@ class TeamTrackFusion:
             track_id = self._kept = mine[best_own].track_id
             if track_id != own_target:
                 self.disagreements += 1
-            parts = [own_est[best_own], *(pred[j] for pred, j in fused_parts[best_own])]
+            parts = [own_est[best_own], *(pred[int(cols[rows == best_own][0])] for pred, rows, cols in taken
+                                          if np.any(rows == best_own))]
             return TeamTarget(estimate=fuse_estimates(self.method, t, parts), probability=p_own, own_track_id=track_id,
                               fused_with=len(parts) - 1)
         self.disagreements += 1

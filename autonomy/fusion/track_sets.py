@@ -38,7 +38,8 @@ from interfaces.state import TrackPicture, TrackReport
 
 from .track_fusion import PredictedEstimates
 
-__all__ = ["ID_COST_SPAN", "TrackSet", "associate_sets", "identity_cost", "mahalanobis2", "track_set"]
+__all__ = ["ID_COST_SPAN", "TrackSet", "associate_sets", "identity_cost", "mahalanobis2", "set_pairs",
+           "track_set"]
 
 P_FLOOR = 1e-4
 """Target probabilities are taken within ``[P_FLOOR, 1 − P_FLOOR]`` in the association: no belief is certain."""
@@ -145,18 +146,29 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     """:func:`~.track_association.associate_positions` of the tracks of ``a`` and ``b`` (the same pairs, sorted),
     gating only the pairs the k-d trees find within each track's reach, and solving each connected component of the
     gating graph alone (module docstring)."""
+    rows, cols = set_pairs(a, b, threshold)
+    return list(zip(rows.tolist(), cols.tolist(), strict=True))
+
+
+def set_pairs(a: TrackSet, b: TrackSet, threshold: float) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of :func:`associate_sets` as two int64 arrays (a's tracks and b's), in the order of a's tracks."""
     n, m = len(a.xy), len(b.xy)
+    none = np.zeros(0, dtype=np.int64)
     if not n or not m:
-        return []
+        return none, none
+    # a gated pair lies within the reach of the one of its tracks with the larger λ: each search keeps the pairs of
+    # its own tracks' reach that are theirs by that rule (a's on a tie), so the two are disjoint and hold every one
     i_a, j_a = _within(b.tree(), a.xy, a.lam, threshold)  # b's tracks within the reach of each of a's
+    mine = a.lam[i_a] >= b.lam[j_a]
     j_b, i_b = _within(a.tree(), b.xy, b.lam, threshold)  # and a's within the reach of each of b's
-    near = np.unique(np.concatenate((i_a * m + j_a, i_b * m + j_b)))  # each pair once, row-major (the kernels' order)
-    i, j = near // m, near % m
+    theirs = b.lam[j_b] > a.lam[i_b]
+    near = np.sort(np.concatenate((i_a[mine] * m + j_a[mine], i_b[theirs] * m + j_b[theirs])))  # row-major: the
+    i, j = near // m, near % m  # kernels' order
     d2 = mahalanobis2(a.xy[i], a.P[i], b.xy[j], b.P[j])
     keep = d2 <= threshold
     rows, cols = i[keep], j[keep]
     if not rows.size:
-        return []
+        return none, none
     cost = d2[keep] + identity_cost(a.p[rows], b.p[cols], max(n, m))
     # with the same cost ``big`` for every own track left alone, the least-cost assignment with misses is the
     # assignment of least cost with ``big`` outside the gate: both make the gated matching of greatest Σ (big − c)
@@ -166,7 +178,8 @@ def associate_sets(a: TrackSet, b: TrackSet, threshold: float) -> list[tuple[int
     chosen = [take] + [solve_component(*kernels.cluster_matrix(rows, cols, cost, order, starts[h], starts[h + 1], n,
                                                                m), miss) for h in hard]
     picked = np.concatenate(chosen).astype(np.int64)
-    return sorted(zip(rows[picked].tolist(), cols[picked].tolist(), strict=True))
+    picked = picked[np.argsort(rows[picked], kind="stable")]  # a matching: each of a's tracks once
+    return rows[picked], cols[picked]
 
 
 def _within(tree: cKDTree, xy: np.ndarray, lam: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray]:

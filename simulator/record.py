@@ -166,11 +166,12 @@ class RunRecorder:
 
     def append_rows(self, stream: str, columns: dict[str, Any]) -> None:
         """Append several rows given column-wise (all columns of equal length; scalars are broadcast)."""
-        lengths = {len(v) for v in columns.values() if np.ndim(v) > 0}
+        arrays = {k: np.asarray(v) for k, v in columns.items()}  # each column made an array once (np.ndim would too)
+        lengths = {len(a) for a in arrays.values() if a.ndim > 0}
         if len(lengths) != 1:
             raise ValueError(f"stream {stream}: columns of unequal or no length {lengths}")
         (n,) = lengths
-        cols = {k: (np.asarray(v).tolist() if np.ndim(v) > 0 else [v] * n) for k, v in columns.items()}
+        cols = {k: (a.tolist() if a.ndim > 0 else [columns[k]] * n) for k, a in arrays.items()}
         self._stream(stream).extend(cols, n)
 
     def _stream(self, name: str) -> _Stream:

@@ -35,3 +35,25 @@ def test_a_tiny_worlds_ceiling_lies_above_its_run():
     assert row["sim_s"] == 1.0 and row["wall_s"] > 0 and row["rtf"] == pytest.approx(1.0 / row["wall_s"])
     assert row["autonomy"] > 0.0
     assert ceiling_rtf(row) > row["rtf"]  # the agents cost something, so freeing them raises the figure
+
+
+@pytest.mark.parametrize("sumo", [False, True])
+def test_the_sweep_warms_each_engine_with_a_discarded_run_first(monkeypatch, sumo):
+    import simulator.bench.scaling as scaling
+    import vehicles.sumo
+
+    calls = []
+
+    def fake_loop(raw):
+        calls.append((raw["traffic"]["engine"], raw["traffic"]["cars"], len(raw["uavs"]), raw["sim"]["duration_s"]))
+        return _row(1.0, sim_s=raw["sim"]["duration_s"], autonomy=0.1)
+
+    monkeypatch.setattr(scaling, "loop_rtf", fake_loop)
+    monkeypatch.setattr(vehicles.sumo, "sumo_available", lambda: sumo)
+    rows = scaling.sweep(duration_s=15.0, uav_duration_s=10.0)
+    warm = [("builtin", 0, 3, scaling.WARM_S)] + ([("sumo", 200, 3, scaling.WARM_S)] if sumo else [])
+    assert calls[:len(warm)] == warm  # first, and not among the rows
+    measured = calls[len(warm):]
+    assert len(rows) == len(measured) == 4 + 2 * sumo + 3
+    assert [(r["engine"], r["cars"], r["uavs"]) for r in rows] == [c[:3] for c in measured]
+    assert all(c[3] == (10.0 if r["sweep"] == "uavs" else 15.0) for r, c in zip(rows, measured, strict=True))

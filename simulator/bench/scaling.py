@@ -95,6 +95,7 @@ def ceiling_rtf(row: dict[str, Any], free: tuple[str, ...] = ("autonomy",)) -> f
                          f"{row['wall_s']:.3f} s wall; they must take less than the whole loop")
     return row["sim_s"] / rest
 
+
 def sweep(duration_s: float = 15.0, uav_duration_s: float = 10.0) -> list[dict[str, Any]]:
     """Every configuration of the module docstring, one run each (seed of the world file), after a short discarded
     run of each engine."""

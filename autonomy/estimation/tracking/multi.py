@@ -41,9 +41,10 @@ from interfaces.state import TargetEstimate, TrackReport
 
 from .batch_update import update_pairs
 from .class_affinity import ClassAffinity
+from .class_readings import Readings, absorb, taken_readings, weighted_readings
 from .fixes import PositionFixer
 from .gate import ChiSquareGate, PredictedNis
-from .identity import CHI2_2_99, IdentityConfig, TargetIdentity, accumulate_readings, class_evidence
+from .identity import CHI2_2_99, IdentityConfig, TargetIdentity
 from .information import TrackInformation
 from .initiator import FilterFactory
 from .pairing import PairingInitiator
@@ -466,74 +467,28 @@ class MultiTargetTracker:
 
     def _read_classes(self, track: Track, weighted: Sequence[tuple[float, MeasurementLike]],
                       none_weight: float = 0.0) -> None:
-        """Class readings of the detections that updated ``track`` (weights: association probabilities, the
-        per-class likelihood of the scan being the mixture ``β₀ + Σ βⱼ C_j[c, o_j]``) into its per-class
-        log-likelihoods, and its evidence into the identity belief (:mod:`.identity`)."""
-        by_attr: dict[str, np.ndarray] = {}
-        for w, det in weighted:
-            for c in getattr(det, "classes", ()):
-                lik = np.asarray(c.likelihood(), dtype=float)
-                prev = by_attr.get(c.attribute)
-                if prev is None and w == 1.0 and none_weight == 0.0:  # one detection taken whole: 0 + 1 · lik
-                    by_attr[c.attribute] = lik
-                else:
-                    by_attr[c.attribute] = (np.full(lik.size, none_weight) if prev is None else prev) + w * lik
-        if by_attr:
-            self._absorb({name: [(track, lik)] for name, lik in by_attr.items()}, [track])
+        """Class readings of the detections that updated ``track`` (weights: association probabilities;
+        :func:`.class_readings.weighted_readings`) into its per-class log-likelihoods, and its evidence into the
+        identity belief (:mod:`.identity`)."""
+        readings = weighted_readings(track, weighted, none_weight)
+        if readings:
+            self._absorb(readings, [track])
 
     def _read_taken(self, pairs: Sequence[tuple[Track, MeasurementLike]]) -> None:
         """:meth:`_read_classes` of each track with the one detection it took whole (a GNN scan; each track once),
-        all of the scan's tracks absorbed together (:meth:`_absorb`)."""
-        reads = [(tr, det.classes) for tr, det in pairs if getattr(det, "classes", ())]
-        if not reads:
-            return
-        by_attr: dict[str, list[tuple[Track, np.ndarray]]] = {}
-        for track, classes in reads:
-            for c in classes:
-                by_attr.setdefault(c.attribute, []).append((track, c.likelihood()))
-        if (sum(map(len, by_attr.values())) != sum(len(c) for _, c in reads)  # an attribute twice in a detection
-                or len({id(tr) for tr, _ in reads}) != len(reads)):
+        all of the scan's tracks absorbed together (:func:`.class_readings.taken_readings`)."""
+        taken = taken_readings(pairs)
+        if taken is None:
             for track, det in pairs:
                 if getattr(det, "classes", ()):
                     self._read_classes(track, [(1.0, det)])
-            return
-        self._absorb(by_attr, [tr for tr, _ in reads])
+        elif taken[1]:
+            self._absorb(*taken)
 
-    def _absorb(self, by_attr: dict[str, list[tuple[Track, np.ndarray]]], tracks: Sequence[Track]) -> None:
-        """Per attribute, each listed track's likelihood of its new readings (per class) into its per-class
-        log-likelihoods (:func:`.identity.accumulate_readings`); then the evidence of ``tracks`` (each once;
-        :func:`.identity.track_evidence`), which the identity belief reads for the confirmed ones in their order.
-        Arrays of one shape are computed as the rows of one array, each row the same numbers as alone."""
-        ident = self.identity.config
-        for name, items in by_attr.items():
-            bg = ident.background.get(name)
-            liks = [lik for _, lik in items]
-            prev = [tr.class_loglik.get(name) for tr, _ in items]
-            before = [k for k, ell in enumerate(prev) if ell is not None]
-            if _alike(liks) and _alike([prev[k] for k in before]):
-                step = np.log(np.maximum(np.array(liks, dtype=float), 1e-300))
-                ells = list(step)  # a first reading: its step
-                if before:
-                    new = accumulate_readings(np.array([prev[k] for k in before], dtype=float), step[before], bg,
-                                              ident.swap_probability)
-                    for k, ell in zip(before, new, strict=True):
-                        ells[k] = ell
-            else:
-                ells = [accumulate_readings(ell, np.log(np.maximum(lik, 1e-300)), bg, ident.swap_probability)
-                        for ell, lik in zip(prev, liks, strict=True)]
-            for (track, _), ell in zip(items, ells, strict=True):
-                track.class_loglik[name] = ell
-        total = np.zeros(len(tracks))
-        for name, c_t in ident.target_classes.items():
-            has = [k for k, tr in enumerate(tracks) if tr.class_loglik.get(name) is not None]
-            if not has:
-                continue
-            ells = [tracks[k].class_loglik[name] for k in has]
-            bg = ident.background.get(name)
-            total[has] += (class_evidence(np.array(ells, dtype=float), c_t, bg) if _alike(ells)
-                           else [class_evidence(ell, c_t, bg) for ell in ells])
-        for track, evidence in zip(tracks, np.clip(total, -50.0, 50.0).tolist(), strict=True):
-            track.evidence = evidence
+    def _absorb(self, by_attr: Readings, tracks: Sequence[Track]) -> None:
+        """The readings ``by_attr`` into the tracks' log-likelihoods and the evidence of ``tracks``
+        (:func:`.class_readings.absorb`), which the identity belief reads for the confirmed ones in their order."""
+        absorb(by_attr, tracks, self.identity.config)
         held = [tr for tr in tracks if tr.confirmed]
         self.identity.read_many([tr.track_id for tr in held], [tr.evidence for tr in held],
                                 where=lambda k: self._where(held[k]))
@@ -652,7 +607,3 @@ def _associator(multi: MultiTrackerConfig, gate: ChiSquareGate, model: MotionMod
     return JointProbabilisticAssociator(gate, distance, detection_probability=multi.detection_probability,
                                         clutter_density=multi.clutter_density, affinity=affinity)
 
-
-def _alike(arrays: Sequence[np.ndarray]) -> bool:
-    """Whether ``arrays`` all have one shape (and so stack into the rows of one array)."""
-    return len({np.shape(a) for a in arrays}) <= 1
